@@ -1,0 +1,110 @@
+"""Command-line interface: parses arguments, calls the API, reports errors in one line."""
+
+from __future__ import annotations
+
+import functools
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from trackdyn import __version__
+from trackdyn.errors import TrackdynInputError
+from trackdyn.io import staged_output
+
+app = typer.Typer(
+    add_completion=False,
+    no_args_is_help=True,
+    pretty_exceptions_enable=False,
+    help="Railway vehicle/track vertical dynamics and track deterioration prediction.",
+)
+console = Console()
+OutOption = Annotated[Path, typer.Option("--out", help="Output folder.")]
+
+
+def refuse_bad_input(command):
+    """Turn TrackdynInputError into a one-line message and exit code 2."""
+
+    @functools.wraps(command)
+    def wrapper(*args, **kwargs):
+        try:
+            return command(*args, **kwargs)
+        except TrackdynInputError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            raise typer.Exit(2) from None
+
+    return wrapper
+
+
+def _version(value: bool):
+    if value:
+        print(f"trackdyn {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def main(
+    version: Annotated[
+        bool, typer.Option("--version", callback=_version, is_eager=True, help="Show version.")
+    ] = False,
+):
+    """Railway vehicle/track vertical dynamics and track deterioration prediction."""
+
+
+@app.command()
+@refuse_bad_input
+def track(
+    geometry: Annotated[
+        Path | None, typer.Option(help="Geometry CSV (distance_m,left_mm,right_mm).")
+    ] = None,
+    supports: Annotated[
+        Path | None,
+        typer.Option(help="Supports CSV (distance_m,rail,load_kN,deflection_mm)."),
+    ] = None,
+    wheel_load_kN: Annotated[float, typer.Option(help="Static wheel load Ps [kN].")] = 127.5,
+    delta: Annotated[float, typer.Option(help="Dynamic wheel load increment δ [-].")] = 0.3,
+    rail: Annotated[str, typer.Option(help="Rail section (60E1, 54E1, 136RE).")] = "60E1",
+    extrapolate: Annotated[
+        bool, typer.Option(help="Allow Ps ± ΔP beyond the measured curves.")
+    ] = False,
+    out: OutOption = Path("trackdyn-out"),
+):
+    """Analyse a track section: loaded profile, linearised stiffness, geometry quality.
+
+    Without --geometry and --supports, the built-in 1 km example section is used.
+    """
+    from trackdyn import plots
+    from trackdyn.data import load_track
+    from trackdyn.errors import require_positive
+    from trackdyn.track.rails import rail_section
+    from trackdyn.track.report import track_dataset, voided_basin
+
+    require_positive("--wheel-load-kN", wheel_load_kN)
+    section = rail_section(rail)
+    trk = load_track(geometry, supports)
+    lin = trk.linearise(wheel_load_kN * 1e3, delta, extrapolate=extrapolate)
+    ds = track_dataset(lin)
+    basin = voided_basin(lin, section.EI)
+    with staged_output(out) as stage:
+        ds.to_netcdf(stage / "track.nc")
+        plots.track_overview(ds, stage / "track_overview.png")
+        plots.load_deflection(lin, stage / "load_deflection.png")
+        plots.deflection_basin(*basin, lin.static_load, stage / "deflection_basin.png")
+    table = Table(title=f"Track summary ({trk.geometry.where})")
+    for col in ("rail", "k2 mean [kN/mm]", "k2 min-max [kN/mm]", "ys mean [mm]",
+                "D1 SD max [mm]", "D2 SD max [mm]"):
+        table.add_column(col)
+    for r, name in enumerate(ds.rail.values):
+        k2 = ds.k2.isel(rail=r) / 1e6
+        sd = ds.sd_unloaded.isel(rail=r)
+        table.add_row(str(name), f"{float(k2.mean()):.1f}",
+                      f"{float(k2.min()):.1f}-{float(k2.max()):.1f}",
+                      f"{float(ds.ys.isel(rail=r).mean()) * 1e3:.2f}",
+                      f"{float(sd.sel(band='D1').max()):.2f}",
+                      f"{float(sd.sel(band='D2').max()):.2f}")
+    console.print(table)
+    console.print(f"wrote track.nc and 3 figures to {out}")
+

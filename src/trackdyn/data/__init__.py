@@ -1,0 +1,36 @@
+"""Files shipped with trackdyn: the built-in example section."""
+
+from __future__ import annotations
+
+from importlib.resources import files
+from pathlib import Path
+
+from trackdyn.errors import TrackdynInputError
+from trackdyn.io import read_geometry, read_supports
+from trackdyn.track.track import Track
+
+EXAMPLE_GEOMETRY = "example_geometry.csv"
+EXAMPLE_SUPPORTS = "example_supports.csv"
+
+
+def example_path(name: str) -> Path:
+    """Path of a file shipped in ``trackdyn/data``."""
+    return Path(str(files(__name__).joinpath(name)))
+
+
+def load_track(geometry=None, supports=None) -> Track:
+    """Read a track from CSV files; with neither given, the built-in example section.
+
+    Parameters
+    ----------
+    geometry : path, optional
+        Geometry CSV, ``distance_m,left_mm,right_mm``.
+    supports : path, optional
+        Supports CSV, ``distance_m,rail,load_kN,deflection_mm`` or
+        ``distance_m,rail,stiffness_kN_per_mm``.
+    """
+    if (geometry is None) != (supports is None):
+        raise TrackdynInputError("give both --geometry and --supports, or neither for the example")
+    if geometry is None:
+        geometry, supports = example_path(EXAMPLE_GEOMETRY), example_path(EXAMPLE_SUPPORTS)
+    return Track(read_geometry(geometry), read_supports(supports))

@@ -1,0 +1,96 @@
+"""Figures (matplotlib, no screen needed). Each function writes one PNG file."""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+RAIL_COLOURS = {"left": "tab:blue", "right": "tab:red"}
+
+
+def _save(fig, path) -> None:
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def track_overview(ds, path) -> None:
+    """Profiles, stiffness and D1 quality along the track (from `track_dataset`)."""
+    fig, axes = plt.subplots(4, 1, figsize=(11, 10), sharex=True)
+    for rail in ds.rail.values:
+        c = RAIL_COLOURS[str(rail)]
+        axes[0].plot(ds.distance, ds.unloaded_profile.sel(rail=rail) * 1e3, color=c, lw=0.7,
+                     label=f"{rail} unloaded")
+        axes[1].plot(ds.distance, ds.loaded_profile.sel(rail=rail) * 1e3, color=c, lw=0.7,
+                     label=f"{rail} loaded")
+        axes[2].plot(ds.sleeper_distance, ds.k2.sel(rail=rail) / 1e6, color=c, lw=0.7,
+                     label=rail)
+    sd = ds.sd_unloaded.sel(band="D1")
+    width = float(sd.segment_end[0] - sd.segment_start[0])
+    for j, rail in enumerate(sd.rail.values):
+        axes[3].bar(sd.segment_start + width * (0.25 + 0.5 * j), sd.sel(rail=rail),
+                    width=width * 0.45, color=RAIL_COLOURS[str(rail)], label=str(rail))
+    for ax in axes[:2]:
+        ax.invert_yaxis()
+    labels = ["unloaded profile [mm]\n(down +)", "loaded profile [mm]\n(down +)",
+              "k2 [kN/mm]", "D1 SD per segment [mm]"]
+    for ax, label in zip(axes, labels, strict=True):
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+        ax.legend(loc="upper right", fontsize=8)
+    axes[-1].set_xlabel("distance [m]")
+    fig.suptitle(f"Track input, static wheel load {ds.attrs['static_wheel_load_N'] / 1e3:.1f} kN")
+    _save(fig, path)
+
+
+def load_deflection(lin, path, n: int = 4) -> None:
+    """Measured curves of a few sleepers with their linearisation (as the seed's Fig. 5.3)."""
+    ps, dp = lin.static_load, lin.delta * lin.static_load
+    k2 = lin.k2
+    picks = {
+        "softest": np.unravel_index(np.argmin(k2), k2.shape),
+        "stiffest": np.unravel_index(np.argmax(k2), k2.shape),
+        "largest ys": np.unravel_index(np.argmax(lin.ys), k2.shape),
+        "median": np.unravel_index(np.argsort(k2, axis=None)[k2.size // 2], k2.shape),
+    }
+    fig, ax = plt.subplots(figsize=(8, 6))
+    supports = lin.track.supports
+    for (label, (r, i)), colour in zip(list(picks.items())[:n], plt.cm.tab10.colors, strict=False):
+        rail = ("left", "right")[r]
+        curve = getattr(supports, rail)[i]
+        loads = np.linspace(curve.load[0], curve.load[-1], 200)
+        ax.plot(curve.deflection * 1e3, curve.load / 1e3, "o", color=colour, ms=4)
+        ax.plot(curve.deflection_at(loads) * 1e3, loads / 1e3, color=colour,
+                label=f"{label}: {rail} rail, {supports.position[i]:.1f} m, "
+                      f"k2 = {k2[r, i] / 1e6:.0f} kN/mm")
+        p = np.array([ps - 1.6 * dp, ps + 1.6 * dp])
+        ax.plot((lin.ys[r, i] + (p - ps) / k2[r, i]) * 1e3, p / 1e3, "--", color=colour, lw=1)
+    for level in (ps - dp, ps, ps + dp):
+        ax.axhline(level / 1e3, color="grey", lw=0.6, ls=":")
+    ax.set_xlabel("deflection [mm]")
+    ax.set_ylabel("wheel load [kN]")
+    ax.set_title("Load-deflection curves (markers: measured; dashed: linearised over Ps ± ΔP)")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    _save(fig, path)
+
+
+def deflection_basin(rail, x0, with_gap, without_gap, load, path) -> None:
+    """Deflection basin and sleeper loads over a voided sleeper (as the seed's Fig. 5.2)."""
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 7), sharex=True)
+    for sol, label, style in ((without_gap, "no voids", "--"), (with_gap, "measured voids", "-")):
+        ax1.plot(sol.x - x0, sol.deflection * 1e3, style, label=label)
+        ax2.plot(sol.support_position - x0, sol.support_force / 1e3, style + "o", ms=3,
+                 label=label)
+    ax1.invert_yaxis()
+    ax1.set_ylabel("rail deflection [mm] (down +)")
+    ax2.set_ylabel("sleeper load [kN]")
+    ax2.set_xlabel(f"distance from the wheel at {x0:.1f} m, {rail} rail [m]")
+    ax1.set_title(f"Deflection basin under a {load / 1e3:.1f} kN wheel over a voided sleeper")
+    for ax in (ax1, ax2):
+        ax.grid(alpha=0.3)
+        ax.legend()
+    _save(fig, path)

@@ -1,0 +1,1 @@
+"""Track side: support model, track input, synthetic tracks, geometry quality."""

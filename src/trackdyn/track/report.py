@@ -1,0 +1,132 @@
+"""The track job: everything `trackdyn track` computes, as one xarray Dataset."""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from trackdyn.track.beam import BeamSolution, linear_supports, solve_beam
+from trackdyn.track.quality import longitudinal_level, segment_sd
+from trackdyn.track.track import RAILS, LinearisedTrack
+
+QUALITY_BANDS = ("D1", "D2")
+
+
+def quality_table(distance, profiles: dict, segment_length: float = 200.0) -> xr.DataArray:
+    """Standard deviation of longitudinal level per band, rail and segment [mm].
+
+    Parameters
+    ----------
+    distance : ndarray
+        Position along the track [m].
+    profiles : dict
+        Vertical profile per rail name [m].
+    segment_length : float
+        Segment length for the standard deviation [m].
+    """
+    values, segments = [], None
+    for band in QUALITY_BANDS:
+        per_rail = []
+        for rail in profiles:
+            table = segment_sd(distance, longitudinal_level(distance, profiles[rail], band),
+                               segment_length)
+            per_rail.append(table["sd_mm"].to_numpy())
+            segments = table
+        values.append(per_rail)
+    return xr.DataArray(
+        np.array(values),
+        dims=("band", "rail", "segment"),
+        coords={
+            "band": list(QUALITY_BANDS),
+            "rail": list(profiles),
+            "segment_start": ("segment", segments["segment_start_m"].to_numpy(),
+                              {"units": "m"}),
+            "segment_end": ("segment", segments["segment_end_m"].to_numpy(), {"units": "m"}),
+        },
+        attrs={"units": "mm", "long_name": "standard deviation of longitudinal level"},
+    )
+
+
+def track_dataset(lin: LinearisedTrack) -> xr.Dataset:
+    """Profiles, linearised stiffness and geometry quality of a linearised track.
+
+    Parameters
+    ----------
+    lin : LinearisedTrack
+        Track linearised about the static wheel load.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``unloaded_profile`` and ``loaded_profile`` (rail, distance) [m]; ``k2`` [N/m] and
+        ``ys`` [m] (rail, sleeper); ``sd_unloaded`` and ``sd_loaded`` (band, rail,
+        segment) [mm].
+    """
+    g = lin.track.geometry
+    pos = lin.track.supports.position
+    lo, hi = lin.track.extent
+    inside = (g.distance >= lo) & (g.distance <= hi)
+    x = g.distance[inside]
+    unloaded = {r: g.profile(r)[inside] for r in RAILS}
+    loaded = {r: lin.loaded_profile(r)[inside] for r in RAILS}
+    ds = xr.Dataset(
+        {
+            "unloaded_profile": (("rail", "distance"), np.array([unloaded[r] for r in RAILS]),
+                                 {"units": "m", "long_name": "unloaded vertical space curve",
+                                  "positive": "down"}),
+            "loaded_profile": (("rail", "distance"), np.array([loaded[r] for r in RAILS]),
+                               {"units": "m", "long_name": "loaded profile (unloaded + ys)",
+                                "positive": "down"}),
+            "k2": (("rail", "sleeper"), lin.k2,
+                   {"units": "N/m", "long_name": "effective linearised loaded stiffness (5.10)"}),
+            "ys": (("rail", "sleeper"), lin.ys,
+                   {"units": "m", "long_name": "static track deflection (5.11)"}),
+            "sd_unloaded": quality_table(x, unloaded),
+            "sd_loaded": quality_table(x, loaded),
+        },
+        coords={
+            "rail": list(RAILS),
+            "distance": ("distance", x, {"units": "m"}),
+            "sleeper_distance": ("sleeper", pos, {"units": "m"}),
+        },
+        attrs={"static_wheel_load_N": lin.static_load, "delta": lin.delta,
+               "geometry_source": g.where, "supports_source": lin.track.supports.where},
+    )
+    return ds
+
+
+def voided_basin(lin: LinearisedTrack, EI: float, window: float = 12.0):
+    """Deflection basin under the static wheel load over the most voided sleeper.
+
+    The supports within ``window`` [m] each side become linear springs with the stiffness
+    equivalent to k2 (5.7 times the spacing) behind their seating gap; the same beam
+    without gaps is the reference.
+
+    Parameters
+    ----------
+    lin : LinearisedTrack
+        Linearised track.
+    EI : float
+        Rail bending stiffness [N m^2].
+    window : float
+        Half length of the modelled rail [m].
+
+    Returns
+    -------
+    rail : str
+        Rail of the most voided sleeper.
+    position : float
+        Its position [m].
+    with_gap, without_gap : BeamSolution
+    """
+    gaps = lin.seating_gap()
+    r, i = np.unravel_index(np.argmax(gaps), gaps.shape)
+    pos = lin.track.supports.position
+    x0 = pos[i]
+    near = np.abs(pos - x0) <= window
+    k = lin.support_stiffness(EI)[r, near]
+    solutions: list[BeamSolution] = [
+        solve_beam(linear_supports(pos[near], k, gap), EI, x0, lin.static_load)
+        for gap in (gaps[r, near], 0.0)
+    ]
+    return RAILS[r], float(x0), solutions[0], solutions[1]

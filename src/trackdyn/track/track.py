@@ -1,0 +1,232 @@
+"""Track data (geometry per rail, support curves per sleeper) and its linearisation (§5.2)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from trackdyn.errors import TrackdynInputError
+from trackdyn.track.support import SupportCurve, secant_linearisation
+from trackdyn.track.winkler import modulus_from_stiffness
+
+RAILS = ("left", "right")
+
+
+def check_distance(distance, where: str) -> np.ndarray:
+    """Return ``distance`` [m] as a float array after checking it is finite and increasing."""
+    d = np.asarray(distance, dtype=float)
+    if d.ndim != 1 or d.size < 2:
+        raise TrackdynInputError(f"{where}: needs at least two distances")
+    bad = np.flatnonzero(~np.isfinite(d))
+    if bad.size:
+        raise TrackdynInputError(f"{where}: distance is NaN or infinite at row {bad[0]}")
+    bad = np.flatnonzero(np.diff(d) <= 0)
+    if bad.size:
+        raise TrackdynInputError(
+            f"{where}: distances not strictly increasing at row {bad[0] + 1} "
+            f"({d[bad[0]]:g} m then {d[bad[0] + 1]:g} m)"
+        )
+    return d
+
+
+def check_finite(values, name: str, where: str) -> np.ndarray:
+    """Return ``values`` as a float array after checking every entry is finite."""
+    v = np.asarray(values, dtype=float)
+    bad = np.flatnonzero(~np.isfinite(v))
+    if bad.size:
+        raise TrackdynInputError(f"{where}: {name} is NaN or infinite at row {bad[0]}")
+    return v
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """Unloaded vertical space curve of both rails, positive downward.
+
+    Parameters
+    ----------
+    distance : ndarray
+        Position along the track, strictly increasing [m].
+    left, right : ndarray
+        Vertical profile of the left and right rail [m].
+    where : str
+        Source name for error messages.
+    """
+
+    distance: np.ndarray
+    left: np.ndarray
+    right: np.ndarray
+    where: str = "geometry"
+
+    def __post_init__(self):
+        d = check_distance(self.distance, self.where)
+        object.__setattr__(self, "distance", d)
+        for rail in RAILS:
+            v = check_finite(getattr(self, rail), f"{rail} profile", self.where)
+            if v.shape != d.shape:
+                raise TrackdynInputError(
+                    f"{self.where}: {rail} profile length differs from distance"
+                )
+            object.__setattr__(self, rail, v)
+
+    def profile(self, rail: str) -> np.ndarray:
+        """Vertical profile of ``rail`` (``"left"`` or ``"right"``) [m]."""
+        if rail not in RAILS:
+            raise TrackdynInputError(f"unknown rail {rail!r}; use left or right")
+        return getattr(self, rail)
+
+
+@dataclass(frozen=True)
+class Supports:
+    """Measured load-deflection curve per sleeper and rail.
+
+    Parameters
+    ----------
+    position : ndarray
+        Sleeper positions along the track, strictly increasing [m].
+    left, right : tuple of SupportCurve
+        One curve per sleeper for each rail.
+    where : str
+        Source name for error messages.
+    """
+
+    position: np.ndarray
+    left: tuple[SupportCurve, ...]
+    right: tuple[SupportCurve, ...]
+    where: str = "supports"
+
+    def __post_init__(self):
+        pos = check_distance(self.position, self.where)
+        object.__setattr__(self, "position", pos)
+        for rail in RAILS:
+            curves = tuple(getattr(self, rail))
+            if len(curves) != pos.size:
+                raise TrackdynInputError(
+                    f"{self.where}: {len(curves)} {rail}-rail curves for {pos.size} sleepers"
+                )
+            object.__setattr__(self, rail, curves)
+
+    @classmethod
+    def linear(cls, position, left_stiffness, right_stiffness, where="supports"):
+        """Linear supports: one stiffness per sleeper and rail [N/m] (scalars broadcast)."""
+        pos = np.asarray(position, dtype=float)
+        curves = {}
+        for rail, k in (("left", left_stiffness), ("right", right_stiffness)):
+            k = np.broadcast_to(np.asarray(k, dtype=float), pos.shape)
+            curves[rail] = tuple(
+                SupportCurve.linear(float(ki), f"{where}: {rail} rail, sleeper {i}")
+                for i, ki in enumerate(k)
+            )
+        return cls(pos, curves["left"], curves["right"], where)
+
+
+@dataclass(frozen=True)
+class Track:
+    """A track section: unloaded geometry per rail and support curves per sleeper.
+
+    Geometry and supports may use different grids; the section a vehicle can run on is
+    where both are defined.
+    """
+
+    geometry: Geometry
+    supports: Supports
+
+    @property
+    def extent(self) -> tuple[float, float]:
+        """First and last position covered by both geometry and supports [m]."""
+        g, s = self.geometry.distance, self.supports.position
+        lo, hi = max(g[0], s[0]), min(g[-1], s[-1])
+        if hi <= lo:
+            raise TrackdynInputError(
+                f"{self.geometry.where} and {self.supports.where} do not overlap"
+            )
+        return lo, hi
+
+    def linearise(self, static_load: float, delta: float = 0.3, **options) -> LinearisedTrack:
+        """Effective linearised loaded stiffness and static deflection per sleeper (5.9-5.11).
+
+        Parameters
+        ----------
+        static_load : float
+            Static wheel load Ps [N].
+        delta : float
+            Dynamic wheel load increment δ [-].
+        **options
+            Passed to `secant_linearisation` (``method``, ``extrapolate``, ``printed_5_10``).
+        """
+        k2 = np.empty((2, self.supports.position.size))
+        ys = np.empty_like(k2)
+        for r, rail in enumerate(RAILS):
+            for i, curve in enumerate(getattr(self.supports, rail)):
+                k2[r, i], ys[r, i] = secant_linearisation(curve, static_load, delta, **options)
+        return LinearisedTrack(self, static_load, delta, k2, ys)
+
+
+@dataclass(frozen=True)
+class LinearisedTrack:
+    """A track linearised about a static wheel load: what a moving wheel sees.
+
+    Parameters
+    ----------
+    track : Track
+        The measured track.
+    static_load : float
+        Static wheel load Ps [N].
+    delta : float
+        Dynamic wheel load increment δ [-].
+    k2 : ndarray
+        Effective linearised loaded stiffness, shape (2 rails, sleepers) [N/m].
+    ys : ndarray
+        Static deflection, shape (2 rails, sleepers) [m].
+    """
+
+    track: Track
+    static_load: float
+    delta: float
+    k2: np.ndarray
+    ys: np.ndarray
+
+    def _check_inside(self, x: np.ndarray):
+        lo, hi = self.track.extent
+        if x.size and (x.min() < lo - 1e-9 or x.max() > hi + 1e-9):
+            raise TrackdynInputError(
+                f"position {x.min():.2f}-{x.max():.2f} m is outside the track ({lo:.2f}-{hi:.2f} m)"
+            )
+
+    def sample(self, rail: str, x) -> tuple[np.ndarray, np.ndarray]:
+        """Stiffness [N/m] and loaded profile [m] of ``rail`` at positions ``x`` [m].
+
+        Stiffness and static deflection are interpolated linearly between sleepers; the
+        loaded profile is the unloaded space curve plus the static deflection (Fig. 5.4).
+        """
+        x = np.asarray(x, dtype=float)
+        self._check_inside(x)
+        r = RAILS.index(rail)
+        pos = self.track.supports.position
+        g = self.track.geometry
+        k = np.interp(x, pos, self.k2[r])
+        loaded = np.interp(x, g.distance, g.profile(rail)) + np.interp(x, pos, self.ys[r])
+        return k, loaded
+
+    def loaded_profile(self, rail: str) -> np.ndarray:
+        """Loaded profile of ``rail`` on the geometry grid [m] (NaN outside the supports)."""
+        g = self.track.geometry
+        pos = self.track.supports.position
+        ys = np.interp(g.distance, pos, self.ys[RAILS.index(rail)], left=np.nan, right=np.nan)
+        return g.profile(rail) + ys
+
+    def seating_gap(self) -> np.ndarray:
+        """Deflection at zero load of the linearised line, ``max(ys - Ps/k2, 0)`` [m]."""
+        return np.maximum(self.ys - self.static_load / self.k2, 0.0)
+
+    def support_stiffness(self, EI: float) -> np.ndarray:
+        """Discrete support stiffness per sleeper [N/m] equivalent to k2 (5.7 times spacing).
+
+        Parameters
+        ----------
+        EI : float
+            Rail bending stiffness [N m^2].
+        """
+        pos = self.track.supports.position
+        spacing = np.gradient(pos)
+        return modulus_from_stiffness(self.k2, EI) * spacing
