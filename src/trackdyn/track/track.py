@@ -230,3 +230,30 @@ class LinearisedTrack:
         pos = self.track.supports.position
         spacing = np.gradient(pos)
         return modulus_from_stiffness(self.k2, EI) * spacing
+
+
+def load_surface(track: Track, rail: str, deflection_grid: np.ndarray):
+    """Wheel load as a bicubic surface of (position [m], deflection [m]) (eq 5.14).
+
+    Each sleeper's measured curve is inverted to load against deflection (monotone cubic,
+    zero load at and below the first deflection point), then a bicubic spline spans
+    sleepers and deflections. Returns a callable ``surface(x, deflection_grid) -> load [N]``
+    evaluated on the grid given here, with loads clipped at zero.
+    """
+    from scipy.interpolate import RectBivariateSpline
+
+    curves = getattr(track.supports, rail)
+    loads = np.empty((len(curves), deflection_grid.size))
+    for i, curve in enumerate(curves):
+        p = np.linspace(curve.load[0], curve.load[-1], 200)
+        y = curve.deflection_at(p, method="pchip")
+        slope = (p[-1] - p[-2]) / (y[-1] - y[-2])
+        loads[i] = np.interp(deflection_grid, y, p, left=0.0, right=np.nan)
+        beyond = deflection_grid > y[-1]
+        loads[i, beyond] = p[-1] + slope * (deflection_grid[beyond] - y[-1])
+    spline = RectBivariateSpline(track.supports.position, deflection_grid, loads, kx=3, ky=3)
+
+    def surface(x):
+        return np.maximum(spline(np.asarray(x, dtype=float), deflection_grid, grid=True), 0.0)
+
+    return surface

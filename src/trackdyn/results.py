@@ -1,0 +1,157 @@
+"""Simulation results as one labelled xarray Dataset, and the statistics taken from it."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import xarray as xr
+
+BODY_MOTIONS = {"body_bounce": "m/s^2", "body_roll": "rad/s^2", "body_pitch": "rad/s^2"}
+
+
+def _dof_units(name: str, order: str) -> str:
+    base = "m" if name.endswith("bounce") else "rad"
+    return base + {"": "", "v": "/s", "a": "/s^2"}[order]
+
+
+def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> xr.Dataset:
+    """Assemble the stored arrays of a run into a Dataset with units in the attributes.
+
+    Variables: ``wheel_load`` (time, contact) [N], mean wheel load of each contact with the
+    static load included; ``wheel_input`` [m] and ``track_stiffness`` [N/m], the loaded
+    profile (mean over the contact's axles) and the summed stiffness each contact sees;
+    ``secondary_displacement`` (time, suspension) [m]; ``wedge_force`` [N];
+    ``wedge_velocity`` [m/s]; ``displacement``, ``velocity`` and ``acceleration`` (time,
+    dof); ``body_<motion>_acceleration`` [m/s^2 or rad/s^2].
+    """
+    n_axles = np.array([len(a) for a in model.contact_axles], dtype=float)
+    damping_force = (out["v"] @ model.Dc.T) * model.contact_damping
+    wheel_load = model.static_wheel_load + (out["fc"] + damping_force) / n_axles
+    dofs = list(model.dof_names)
+    ds = xr.Dataset(
+        {
+            "wheel_load": (
+                ("time", "contact"),
+                wheel_load,
+                {
+                    "units": "N",
+                    "long_name": "wheel load, static included (mean of the wheels of the contact)",
+                },
+            ),
+            "wheel_input": (
+                ("time", "contact"),
+                out["r"],
+                {
+                    "units": "m",
+                    "long_name": "track input under the contact "
+                    "(loaded profile, or unloaded for the nonlinear track)",
+                    "positive": "down",
+                },
+            ),
+            "track_stiffness": (
+                ("time", "contact"),
+                out["k"],
+                {
+                    "units": "N/m",
+                    "long_name": "track stiffness under the contact (sum over its axles)",
+                },
+            ),
+            "secondary_displacement": (
+                ("time", "suspension"),
+                out["d"],
+                {
+                    "units": "m",
+                    "long_name": "displacement across "
+                    "the secondary suspension, compression positive",
+                },
+            ),
+            "wedge_force": (
+                ("time", "suspension"),
+                out["fw"],
+                {"units": "N", "long_name": "friction force of the wedge"},
+            ),
+            "wedge_velocity": (
+                ("time", "suspension"),
+                out["vw"],
+                {"units": "m/s", "long_name": "relative velocity across the secondary suspension"},
+            ),
+            "displacement": (
+                ("time", "dof"),
+                out["q"],
+                {
+                    "units": "m or rad",
+                    "long_name": "generalised displacement from static equilibrium",
+                    "positive": "down",
+                },
+            ),
+            "velocity": (("time", "dof"), out["v"], {"units": "m/s or rad/s"}),
+            "acceleration": (("time", "dof"), out["a"], {"units": "m/s^2 or rad/s^2"}),
+        },
+        coords={
+            "time": ("time", time, {"units": "s"}),
+            "distance": ("time", centre, {"units": "m", "long_name": "vehicle centre position"}),
+            "contact": list(model.contact_names),
+            "contact_offset": (
+                "contact",
+                [float(np.mean(a)) for a in model.contact_axles],
+                {"units": "m", "long_name": "contact position ahead of the vehicle centre"},
+            ),
+            "contact_rail": ("contact", list(model.contact_rails)),
+            "suspension": list(model.wedge_names),
+            "dof": dofs,
+        },
+        attrs={
+            "model": model.name,
+            "vehicle": vehicle.name,
+            "speed_m_per_s": speed,
+            "time_step_s": dt,
+            "static_wheel_load_N": model.static_wheel_load,
+            "track": "nonlinear (5.14)" if nonlinear else "linearised (5.10-5.11)",
+        },
+    )
+    for name, units in BODY_MOTIONS.items():
+        if name in dofs:
+            ds[f"{name}_acceleration"] = ds.acceleration.sel(dof=name, drop=True).assign_attrs(
+                units=units
+            )
+    return ds
+
+
+def dominant_frequency(signal: np.ndarray, dt: float) -> float:
+    """Frequency of the largest peak of the spectrum of ``signal`` (mean removed) [Hz]."""
+    x = np.asarray(signal, dtype=float) - np.mean(signal)
+    if x.size < 4:
+        return float("nan")
+    spectrum = np.abs(np.fft.rfft(x * np.hanning(x.size)))
+    freq = np.fft.rfftfreq(x.size, dt)
+    return float(freq[1:][np.argmax(spectrum[1:])])
+
+
+def summary(ds: xr.Dataset) -> pd.DataFrame:
+    """Per contact: max, min and SD of the dynamic wheel load [kN]; run-wide extremes.
+
+    Columns carry units: ``dyn_load_max_kN`` etc. are of the wheel load minus the static
+    load; ``secondary_max_mm`` is the largest displacement across any secondary
+    suspension; ``body_bounce_acc_rms_m_per_s2`` the body bounce acceleration RMS.
+    """
+    dyn = (ds.wheel_load - ds.attrs["static_wheel_load_N"]) / 1e3
+    dt = float(ds.time[1] - ds.time[0]) if ds.time.size > 1 else float("nan")
+    rows = []
+    for c in ds.contact.values:
+        x = dyn.sel(contact=c).values
+        rows.append(
+            {
+                "contact": str(c),
+                "dyn_load_max_kN": x.max(),
+                "dyn_load_min_kN": x.min(),
+                "dyn_load_sd_kN": x.std(),
+                "dominant_frequency_Hz": dominant_frequency(x, dt),
+            }
+        )
+    table = pd.DataFrame(rows)
+    sec = ds.secondary_displacement
+    table["secondary_max_mm"] = float(np.abs(sec).max()) * 1e3 if sec.size else np.nan
+    table["body_bounce_acc_rms_m_per_s2"] = float(
+        np.sqrt((ds.acceleration.sel(dof=ds.dof.values[0]) ** 2).mean())
+    )
+    return table

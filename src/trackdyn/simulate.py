@@ -1,0 +1,251 @@
+"""`simulate`: a vehicle model running over a track at constant speed."""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from trackdyn.errors import TrackdynInputError, require_positive
+from trackdyn.results import make_dataset
+from trackdyn.solver.central import (
+    STEPS_PER_PERIOD,
+    highest_frequency,
+    integrate_chunk,
+    step_matrices,
+)
+from trackdyn.track.track import LinearisedTrack, Track, load_surface
+from trackdyn.vehicle.models import build_model
+from trackdyn.vehicle.parameters import Vehicle
+
+CHUNK_STEPS = 20_000
+"""Steps integrated per compiled call; bounds the memory of the sampled track input."""
+TABLE_POINTS = 96
+"""Deflection points of the per-step load table of the nonlinear contact."""
+
+
+class _Inputs:
+    """Track input under each contact at given vehicle-centre positions."""
+
+    def __init__(self, model, lin: LinearisedTrack, nonlinear: bool):
+        self.model, self.lin, self.nonlinear = model, lin, nonlinear
+        if nonlinear:
+            if any(len(a) != 1 for a in model.contact_axles):
+                raise TrackdynInputError(
+                    "the nonlinear track (5.14) is available for single-wheel contacts "
+                    "(the 2-DOF model); bogie models use the linearised track"
+                )
+            top = max(
+                c.deflection[-1] for r in ("left", "right") for c in getattr(lin.track.supports, r)
+            )
+            self.grid = np.linspace(0.0, 1.5 * top, TABLE_POINTS)
+            self.surface = {
+                r: load_surface(lin.track, r, self.grid) for r in set(model.contact_rails)
+            }
+
+    def __call__(self, centre: np.ndarray):
+        m = self.model
+        k = np.zeros((centre.size, len(m.Dc)))
+        r = np.zeros_like(k)
+        table = np.zeros((centre.size if self.nonlinear else 0, len(m.Dc), TABLE_POINTS))
+        for c, (rail, axles) in enumerate(zip(m.contact_rails, m.contact_axles, strict=True)):
+            for offset in axles:
+                kk, loaded = self.lin.sample(rail, centre + offset)
+                k[:, c] += kk
+                r[:, c] += loaded / len(axles)
+            if self.nonlinear:
+                x = centre + axles[0]
+                g = self.lin.track.geometry
+                r[:, c] = np.interp(x, g.distance, g.profile(rail))
+                table[:, c] = self.surface[rail](x)
+        return k, r, table
+
+
+def _static_state(model, k, r, table, grid):
+    """Static equilibrium at the first position (wedges at rest carry no friction)."""
+    Kc = model.K + model.Dc.T @ (k[:, None] * model.Dc)
+    q = np.linalg.solve(Kc, model.Dc.T @ (k * r))
+    if table.shape[0] == 0:
+        return q
+    dy = grid[1] - grid[0]
+    for _ in range(100):
+        defl = model.Dc @ q - r
+        force = np.array([np.interp(d, grid, t) for d, t in zip(defl, table[0], strict=True)])
+        slope = np.array(
+            [
+                np.interp(d, grid[:-1] + dy / 2, np.diff(t) / dy)
+                for d, t in zip(defl, table[0], strict=True)
+            ]
+        )
+        residual = model.K @ q + model.Dc.T @ (force - model.static_wheel_load)
+        jac = model.K + model.Dc.T @ (slope[:, None] * model.Dc)
+        dq = np.linalg.solve(jac, -residual)
+        q += dq
+        if np.max(np.abs(dq)) < 1e-13:
+            return q
+    raise TrackdynInputError("no static equilibrium found on the nonlinear track")
+
+
+def simulate(
+    vehicle: Vehicle,
+    track: Track | LinearisedTrack,
+    speed: float,
+    model: str = "11dof",
+    *,
+    dt: float | None = None,
+    store_every: int = 1,
+    delta: float = 0.3,
+    nonlinear: bool = False,
+    start: float | None = None,
+    end: float | None = None,
+    progress: bool = False,
+    newton_tol: float = 1e-10,
+    newton_max_iter: int = 50,
+) -> xr.Dataset:
+    """Run a vehicle model over a track at constant speed.
+
+    The vehicle starts at static equilibrium with its rearmost axle at ``start`` and runs
+    until its foremost axle reaches ``end``.
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Vehicle parameter set.
+    track : Track or LinearisedTrack
+        The track; a `Track` is linearised about the vehicle's static wheel load.
+    speed : float
+        Vehicle speed [m/s].
+    model : str
+        ``2dof``, ``2dof-wedge``, ``4dof``, ``7dof`` or ``11dof``.
+    dt : float, optional
+        Time step [s]. Default: ``STEPS_PER_PERIOD`` steps per period of the highest
+        natural frequency with the stiffest track on the path, and no more than half a
+        geometry sample interval of travel per step. A step beyond the stability limit
+        ``2 / ω_max`` of the explicit scheme is refused.
+    store_every : int
+        Keep every n-th step in the output.
+    delta : float
+        Dynamic wheel load increment δ for the linearisation [-].
+    nonlinear : bool
+        Take the instantaneous track stiffness from the bicubic surface of 5.14 instead of
+        the linearised track (single-wheel models only).
+    start, end : float, optional
+        Part of the track to run over [m]; default the whole track.
+    progress : bool
+        Show a progress bar.
+    newton_tol : float
+        Relative tolerance on the wedge velocities of the Newton iteration [-].
+    newton_max_iter : int
+        Newton iterations allowed per step.
+
+    Returns
+    -------
+    xarray.Dataset
+        See `trackdyn.results.make_dataset`.
+    """
+    speed = float(require_positive("speed", speed))
+    if int(store_every) != store_every or store_every < 1:
+        raise TrackdynInputError(f"store_every must be a whole number >= 1, got {store_every!r}")
+    m = build_model(model, vehicle)
+    lin = (
+        track
+        if isinstance(track, LinearisedTrack)
+        else track.linearise(vehicle.static_wheel_load, delta)
+    )
+    lo, hi = lin.track.extent
+    rear, front = m.reach
+    start = lo if start is None else max(float(start), lo)
+    end = hi if end is None else min(float(end), hi)
+    c0, c1 = start - rear, end - front
+    if c1 <= c0:
+        raise TrackdynInputError(
+            f"track {start:.1f}-{end:.1f} m is shorter than the vehicle's path: the axles span "
+            f"{front - rear:.2f} m"
+        )
+    k_max = np.array(
+        [
+            lin.k2[0 if r == "left" else 1].max() * len(a)
+            for r, a in zip(m.contact_rails, m.contact_axles, strict=True)
+        ]
+    )
+    omega = highest_frequency(m.M, m.K + m.Dc.T @ (k_max[:, None] * m.Dc))
+    limit = 2.0 / omega
+    spacing = float(np.min(np.diff(lin.track.geometry.distance)))
+    if dt is None:
+        dt = min(2 * np.pi / omega / STEPS_PER_PERIOD, 0.5 * spacing / speed)
+    dt = float(require_positive("dt", dt))
+    if dt >= limit:
+        raise TrackdynInputError(
+            f"time step dt = {dt:.3g} s is beyond the stability limit {limit:.3g} s of the "
+            f"explicit scheme (highest natural frequency {omega / 2 / np.pi:.1f} Hz)"
+        )
+    n_steps = int(np.floor((c1 - c0) / (speed * dt))) + 1
+    inputs = _Inputs(m, lin, nonlinear)
+    P1, P2, Gc, Gw, H = step_matrices(m.M, m.C, m.K, m.Dc, m.Dw, dt)
+    k0, r0, t0 = inputs(np.array([c0]))
+    q0 = _static_state(m, k0[0], r0[0], t0, getattr(inputs, "grid", None))
+    qm1 = q0.copy()
+    n_store = (n_steps - 1) // store_every + 1
+    n, nc, nw = len(m.dof_names), len(m.contact_names), len(m.wedge_names)
+    out = {
+        name: np.empty((n_store, width))
+        for name, width in (
+            ("q", n),
+            ("v", n),
+            ("a", n),
+            ("fc", nc),
+            ("fw", nw),
+            ("d", nw),
+            ("vw", nw),
+            ("k", nc),
+            ("r", nc),
+        )
+    }
+    grid = getattr(inputs, "grid", np.array([0.0, 1.0]))
+    stored = 0
+    bar = _progress(progress, n_steps, f"{m.name} at {speed * 3.6:.0f} km/h")
+    for first in range(0, n_steps, CHUNK_STEPS):
+        steps = np.arange(first, min(first + CHUNK_STEPS, n_steps))
+        centre = c0 + speed * dt * steps
+        k, r, table = inputs(centre)
+        keep = steps % store_every == 0
+        sl = slice(stored, stored + int(keep.sum()))
+        status = integrate_chunk(
+            P1, P2, Gc, Gw, m.Dc, m.Dw, H, m.wedge_params, m.static_wheel_load,
+            k, r, table, grid[0], grid[1] - grid[0],
+            q0, qm1, dt, first, store_every, newton_tol, newton_max_iter,
+            out["q"][sl], out["v"][sl], out["a"][sl], out["fc"][sl], out["fw"][sl],
+            out["d"][sl], out["vw"][sl],
+        )  # fmt: skip
+        if status >= 0:
+            t = (first + status) * dt
+            raise TrackdynInputError(
+                f"Newton iteration of the wedge friction did not converge at t = {t:.4f} s, "
+                f"vehicle centre at {c0 + speed * t:.2f} m"
+            )
+        out["k"][sl], out["r"][sl] = k[keep], r[keep]
+        stored += int(keep.sum())
+        bar(len(steps))
+    bar(None)
+    time = np.arange(n_store) * store_every * dt
+    return make_dataset(
+        m, vehicle, time, c0 + speed * time, out, dt=dt, speed=speed, nonlinear=nonlinear
+    )
+
+
+def _progress(show: bool, total: int, label: str):
+    """A callable advancing a rich progress bar by n steps; ``None`` closes it."""
+    if not show:
+        return lambda n: None
+    from rich.progress import Progress
+
+    prog = Progress(transient=True)
+    task = prog.add_task(label, total=total)
+    prog.start()
+
+    def advance(n):
+        if n is None:
+            prog.stop()
+        else:
+            prog.advance(task, n)
+
+    return advance

@@ -1,0 +1,109 @@
+"""The seed's models (2-, 4-, 7- and 11-DOF) as assemblies of one vehicle parameter set.
+
+Coordinates (positive down): body bounce ``y1``, roll ``θ``, pitch ``α``; bogie frame
+bounce ``yF, yB`` and roll ``φF, φB``; lumped wheelset bounce ``zF, zB`` and roll
+``ωF, ωB``. The 4- and 7-DOF models have no primary suspension (5.4.2: it arrives with the
+11-DOF model), so the bogie frame moves with the wheelset and its mass and roll inertia
+are lumped into it. All bogie models use the bogie approximation of 5.4.3.
+"""
+
+from __future__ import annotations
+
+from trackdyn.errors import TrackdynInputError
+from trackdyn.vehicle.assembly import Assembly, Body, Contact, Damper, Model, Point, Spring, Wedge
+from trackdyn.vehicle.parameters import Vehicle
+
+GROUND = Point(None)
+SIDES = (("L", 1.0, "left"), ("R", -1.0, "right"))
+
+
+def _wedge(v: Vehicle, name: str, p: Point, q: Point, scale: float = 1.0) -> Wedge:
+    return Wedge(name, p, q, v.k_ss * scale, v.x_ss, v.mu, v.alpha_w, v.C_slope * scale)
+
+
+def two_dof(v: Vehicle, wedge: bool = False) -> Model:
+    """Eqs 5.12-5.13: one eighth of the body on one wheel of the front-left bogie side.
+
+    Body mass ``m1/8``; wheel mass ``(mw + m2)/4`` (no primary suspension); secondary
+    stiffness ``k1/2`` and viscous damping ``rho1``, or with ``wedge`` half a side's
+    friction wedge (Appendix B uses the wedge law of 5.30) in place of ``rho1``.
+    """
+    asm = Assembly()
+    body = asm.add(Body("body", v.m1 / 8))
+    wheel = asm.add(Body("wheel", (v.mw + v.m2) / 4))
+    asm.add(Spring(body.at(), wheel.at(), v.k1 / 2))
+    if wedge:
+        asm.add(_wedge(v, "secondary", body.at(), wheel.at(), scale=0.5))
+    else:
+        asm.add(Damper(body.at(), wheel.at(), v.rho1))
+    asm.add(Contact("wheel", wheel.at(), "left", (v.b_cc + v.a,), v.rho2))
+    return asm.build("2dof-wedge" if wedge else "2dof", v.static_wheel_load)
+
+
+def _bogie_side_contacts(asm, v, wheelset, prefix, centre):
+    for side, sign, rail in SIDES:
+        axles = (centre + v.a, centre - v.a)
+        asm.add(Contact(prefix + side, wheelset.at(sign * v.l), rail, axles, v.rho2))
+
+
+def four_dof(v: Vehicle) -> Model:
+    """Body and wheelset bounce and roll: half the body on one (front) lumped bogie."""
+    asm = Assembly()
+    body = asm.add(Body("body", v.m1 / 2, roll_inertia=v.I1 / 2, motions=("bounce", "roll")))
+    ws = asm.add(
+        Body("wheelset", v.mw + v.m2, roll_inertia=v.Iw + v.I2, motions=("bounce", "roll"))
+    )
+    for side, sign, _ in SIDES:
+        asm.add(Spring(body.at(sign * v.b), ws.at(sign * v.b), v.k1))
+        asm.add(_wedge(v, side, body.at(sign * v.b), ws.at(sign * v.b)))
+    _bogie_side_contacts(asm, v, ws, "", v.b_cc)
+    return asm.build("4dof", v.static_wheel_load)
+
+
+def seven_dof(v: Vehicle) -> Model:
+    """Body bounce, roll, pitch; front and back lumped wheelsets, bounce and roll."""
+    asm = Assembly()
+    body = asm.add(Body("body", v.m1, v.I1, v.Ip, ("bounce", "roll", "pitch")))
+    for end, x in (("front", v.b_cc), ("back", -v.b_cc)):
+        ws = asm.add(
+            Body(
+                f"{end}_wheelset", v.mw + v.m2, roll_inertia=v.Iw + v.I2, motions=("bounce", "roll")
+            )
+        )
+        for side, sign, _ in SIDES:
+            p = body.at(sign * v.b, x)
+            asm.add(Spring(p, ws.at(sign * v.b), v.k1))
+            asm.add(_wedge(v, end[0].upper() + side, p, ws.at(sign * v.b)))
+        _bogie_side_contacts(asm, v, ws, end[0].upper(), x)
+    return asm.build("7dof", v.static_wheel_load)
+
+
+def eleven_dof(v: Vehicle) -> Model:
+    """Eqs 5.19-5.33: adds the bogie frames and the primary suspension."""
+    asm = Assembly()
+    body = asm.add(Body("body", v.m1, v.I1, v.Ip, ("bounce", "roll", "pitch")))
+    for end, x in (("front", v.b_cc), ("back", -v.b_cc)):
+        frame = asm.add(Body(f"{end}_bogie", v.m2, roll_inertia=v.I2, motions=("bounce", "roll")))
+        ws = asm.add(Body(f"{end}_wheelset", v.mw, roll_inertia=v.Iw, motions=("bounce", "roll")))
+        for side, sign, _ in SIDES:
+            p = body.at(sign * v.b, x)
+            asm.add(Spring(p, frame.at(sign * v.b), v.k1))
+            asm.add(_wedge(v, end[0].upper() + side, p, frame.at(sign * v.b)))
+            asm.add(Spring(frame.at(sign * v.b), ws.at(sign * v.b), v.kp))
+            asm.add(Damper(frame.at(sign * v.b), ws.at(sign * v.b), v.rho_p))
+        _bogie_side_contacts(asm, v, ws, end[0].upper(), x)
+    return asm.build("11dof", v.static_wheel_load)
+
+
+MODELS = {"2dof": two_dof, "4dof": four_dof, "7dof": seven_dof, "11dof": eleven_dof}
+
+
+def build_model(name: str, vehicle: Vehicle) -> Model:
+    """Build a model by name: ``2dof``, ``2dof-wedge``, ``4dof``, ``7dof`` or ``11dof``."""
+    if name == "2dof-wedge":
+        return two_dof(vehicle, wedge=True)
+    if name not in MODELS:
+        raise TrackdynInputError(
+            f"unknown model {name!r}; known: 2dof, 2dof-wedge, 4dof, 7dof, 11dof"
+        )
+    return MODELS[name](vehicle)

@@ -1,0 +1,205 @@
+"""Vehicle parameter sets in the seed's symbols, SI units, read from TOML with units."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from dataclasses import dataclass, field
+from importlib.resources import files
+from pathlib import Path
+
+from trackdyn.errors import TrackdynInputError
+
+GRAVITY = 9.81
+"""Gravitational acceleration [m/s^2]."""
+
+# SI unit of each parameter, and a description for docs and error messages.
+PARAMETERS: dict[str, tuple[str, str]] = {
+    "m1": ("kg", "body mass"),
+    "I1": ("kg m^2", "body roll inertia"),
+    "Ip": ("kg m^2", "body pitch inertia"),
+    "m2": ("kg", "bogie frame mass (per bogie)"),
+    "I2": ("kg m^2", "bogie frame roll inertia"),
+    "mw": ("kg", "lumped wheelset mass per bogie (twice one wheelset)"),
+    "Iw": ("kg m^2", "lumped wheelset roll inertia per bogie"),
+    "k1": ("N/m", "secondary spring stiffness per side of a bogie"),
+    "kp": ("N/m", "primary stiffness per side of a bogie"),
+    "rho_p": ("N s/m", "primary damping per side of a bogie"),
+    "rho1": ("N s/m", "viscous secondary damping per wheel (2-DOF model only)"),
+    "rho2": ("N s/m", "track damping per wheel-rail contact"),
+    "b": ("m", "half lateral spacing of the suspensions"),
+    "b_cc": ("m", "half distance between bogie centres"),
+    "l": ("m", "half distance between the wheel-rail contact points"),
+    "a": ("m", "half wheelbase of a bogie"),
+    "k_ss": ("N/m", "wedge (control) spring stiffness per side of a bogie"),
+    "x_ss": ("m", "static compression of the wedge spring"),
+    "mu": ("-", "wedge friction coefficient"),
+    "alpha_w": ("rad", "wedge angle"),
+    "C_slope": ("N s/m", "slope of the friction law near zero relative velocity"),
+}
+
+# Accepted units: name -> (SI unit it converts to, factor).
+UNITS: dict[str, tuple[str, float]] = {
+    "kg": ("kg", 1.0),
+    "t": ("kg", 1e3),
+    "kg m^2": ("kg m^2", 1.0),
+    "t m^2": ("kg m^2", 1e3),
+    "N/m": ("N/m", 1.0),
+    "kN/m": ("N/m", 1e3),
+    "kN/mm": ("N/m", 1e6),
+    "MN/m": ("N/m", 1e6),
+    "N s/m": ("N s/m", 1.0),
+    "kN s/m": ("N s/m", 1e3),
+    "MN s/m": ("N s/m", 1e6),
+    "m": ("m", 1.0),
+    "mm": ("m", 1e-3),
+    "rad": ("rad", 1.0),
+    "deg": ("rad", math.pi / 180),
+    "-": ("-", 1.0),
+}
+
+MAY_BE_ZERO = {"rho_p", "rho1", "rho2", "mu", "x_ss"}
+PRESETS = files("trackdyn.vehicle").joinpath("presets")
+
+
+@dataclass(frozen=True)
+class Vehicle:
+    """A vehicle parameter set (seed symbols, SI units); see `PARAMETERS` for meanings.
+
+    Build one with `load_vehicle` (preset name or TOML file) and vary it with `replace`.
+    """
+
+    m1: float
+    I1: float
+    Ip: float
+    m2: float
+    I2: float
+    mw: float
+    Iw: float
+    k1: float
+    kp: float
+    rho_p: float
+    rho1: float
+    rho2: float
+    b: float
+    b_cc: float
+    l: float  # noqa: E741 - the seed's symbol
+    a: float
+    k_ss: float
+    x_ss: float
+    mu: float
+    alpha_w: float
+    C_slope: float
+    name: str = ""
+    sources: dict = field(default_factory=dict, compare=False, repr=False)
+
+    def __post_init__(self):
+        for key in PARAMETERS:
+            value = getattr(self, key)
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise TrackdynInputError(f"vehicle parameter {key} must be a number, got {value!r}")
+            lower_ok = key in MAY_BE_ZERO
+            if not math.isfinite(value) or value < 0 or (value == 0 and not lower_ok):
+                need = ">= 0" if lower_ok else "> 0"
+                raise TrackdynInputError(f"vehicle parameter {key} must be {need}, got {value!r}")
+        if not 0 < self.alpha_w < math.pi / 2:
+            raise TrackdynInputError(
+                f"vehicle parameter alpha_w must be in (0, 90) deg, got "
+                f"{math.degrees(self.alpha_w):g} deg"
+            )
+        if self.mu >= math.tan(self.alpha_w):
+            raise TrackdynInputError(
+                f"vehicle parameter mu = {self.mu:g} locks the wedge: it must be below "
+                f"tan(alpha_w) = {math.tan(self.alpha_w):.3f}"
+            )
+
+    def replace(self, **changes) -> Vehicle:
+        """A copy with some parameters changed [SI units]; an unknown name is refused."""
+        unknown = sorted(set(changes) - set(PARAMETERS) - {"name"})
+        if unknown:
+            raise TrackdynInputError(
+                f"unknown vehicle parameter {unknown[0]!r}; known: {', '.join(PARAMETERS)}"
+            )
+        sources = dict(self.sources)
+        sources.update({k: "override" for k in changes if k != "name"})
+        return dataclasses.replace(self, sources=sources, **changes)
+
+    @property
+    def static_wheel_load(self) -> float:
+        """Static load per wheel, ``g (m1/8 + m2/4 + mw/4)`` [N]."""
+        return GRAVITY * (self.m1 / 8 + self.m2 / 4 + self.mw / 4)
+
+    def as_dict(self) -> dict[str, float]:
+        """Parameter values by name [SI units]."""
+        return {k: getattr(self, k) for k in PARAMETERS}
+
+
+def _read_toml(path) -> dict:
+    try:
+        with open(path, "rb") as fh:
+            return tomllib.load(fh)
+    except OSError:
+        raise TrackdynInputError(f"{path}: cannot read vehicle file") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise TrackdynInputError(f"{path}: not valid TOML ({exc})") from None
+
+
+def _resolve(name_or_path) -> Path:
+    path = Path(str(name_or_path))
+    if path.suffix == ".toml":
+        return path
+    preset = PRESETS.joinpath(f"{name_or_path}.toml")
+    if not preset.is_file():
+        known = sorted(
+            p.name.removesuffix(".toml") for p in PRESETS.iterdir() if p.name.endswith(".toml")
+        )
+        raise TrackdynInputError(
+            f"unknown vehicle preset {name_or_path!r}; known: {', '.join(known)}"
+        )
+    return Path(str(preset))
+
+
+def load_vehicle(name_or_path, **overrides) -> Vehicle:
+    """Load a vehicle from a preset name (``loaded``, ``empty``, ...) or a TOML file.
+
+    Each parameter is a table with ``value``, ``unit`` and ``source``; a file may name a
+    ``base`` preset or file and give only what differs.
+
+    Parameters
+    ----------
+    name_or_path : str or Path
+        Preset name or path to a ``.toml`` file.
+    **overrides : float
+        Parameter values replacing the file's [SI units].
+    """
+    path = _resolve(name_or_path)
+    data = _read_toml(path)
+    values, sources = {}, {}
+    if "base" in data:
+        base = load_vehicle(data.pop("base"))
+        values, sources = base.as_dict(), dict(base.sources)
+    name = str(data.pop("name", path.stem))
+    for key, entry in data.items():
+        if key not in PARAMETERS:
+            raise TrackdynInputError(f"{path}: unknown vehicle parameter {key!r}")
+        if not isinstance(entry, dict) or not {"value", "unit", "source"} <= set(entry):
+            raise TrackdynInputError(f"{path}: parameter {key} needs value, unit and source")
+        unit = str(entry["unit"])
+        if unit not in UNITS or UNITS[unit][0] != PARAMETERS[key][0]:
+            raise TrackdynInputError(
+                f"{path}: unit {unit!r} of {key} does not parse as {PARAMETERS[key][0]}"
+            )
+        try:
+            values[key] = float(entry["value"]) * UNITS[unit][1]
+        except (TypeError, ValueError):
+            raise TrackdynInputError(f"{path}: value of {key} is not a number") from None
+        sources[key] = str(entry["source"])
+    missing = [k for k in PARAMETERS if k not in values]
+    if missing:
+        raise TrackdynInputError(f"{path}: missing vehicle parameter {missing[0]}")
+    try:
+        vehicle = Vehicle(**values, name=name, sources=sources)
+    except TrackdynInputError as exc:
+        raise TrackdynInputError(f"{path}: {exc}") from None
+    return vehicle.replace(**overrides) if overrides else vehicle
