@@ -94,17 +94,73 @@ def track(
         plots.load_deflection(lin, stage / "load_deflection.png")
         plots.deflection_basin(*basin, lin.static_load, stage / "deflection_basin.png")
     table = Table(title=f"Track summary ({trk.geometry.where})")
-    for col in ("rail", "k2 mean [kN/mm]", "k2 min-max [kN/mm]", "ys mean [mm]",
-                "D1 SD max [mm]", "D2 SD max [mm]"):
+    for col in (
+        "rail",
+        "k2 mean [kN/mm]",
+        "k2 min-max [kN/mm]",
+        "ys mean [mm]",
+        "D1 SD max [mm]",
+        "D2 SD max [mm]",
+    ):
         table.add_column(col)
     for r, name in enumerate(ds.rail.values):
         k2 = ds.k2.isel(rail=r) / 1e6
         sd = ds.sd_unloaded.isel(rail=r)
-        table.add_row(str(name), f"{float(k2.mean()):.1f}",
-                      f"{float(k2.min()):.1f}-{float(k2.max()):.1f}",
-                      f"{float(ds.ys.isel(rail=r).mean()) * 1e3:.2f}",
-                      f"{float(sd.sel(band='D1').max()):.2f}",
-                      f"{float(sd.sel(band='D2').max()):.2f}")
+        table.add_row(
+            str(name),
+            f"{float(k2.mean()):.1f}",
+            f"{float(k2.min()):.1f}-{float(k2.max()):.1f}",
+            f"{float(ds.ys.isel(rail=r).mean()) * 1e3:.2f}",
+            f"{float(sd.sel(band='D1').max()):.2f}",
+            f"{float(sd.sel(band='D2').max()):.2f}",
+        )
     console.print(table)
     console.print(f"wrote track.nc and 3 figures to {out}")
 
+
+@app.command()
+@refuse_bad_input
+def run(
+    scenario: Annotated[
+        Path | None, typer.Argument(help="Scenario TOML; default: the built-in example.")
+    ] = None,
+    out: OutOption = Path("trackdyn-out"),
+):
+    """Simulate a vehicle over a track and write results.nc, summary.csv and figures.
+
+    With no scenario: the loaded wagon, 11-DOF model, the example 1 km section, 60 km/h.
+    """
+    from trackdyn import plots
+    from trackdyn.results import summary
+    from trackdyn.scenario import load_scenario
+    from trackdyn.simulate import simulate
+
+    spec, base = load_scenario(scenario)
+    vehicle = spec.vehicle.load(base)
+    trk = spec.track.load(base)
+    r = spec.run
+    ds = simulate(
+        vehicle,
+        trk,
+        r.speed_kmh / 3.6,
+        r.model,
+        dt=r.dt_s,
+        store_every=r.store_every,
+        delta=r.delta,
+        nonlinear=r.nonlinear,
+        progress=True,
+    )
+    table = summary(ds)
+    with staged_output(out) as stage:
+        ds.to_netcdf(stage / "results.nc")
+        table.to_csv(stage / "summary.csv", index=False, float_format="%.4g")
+        plots.wheel_loads(ds, stage / "wheel_loads.png")
+        plots.secondary(ds, stage / "secondary_displacement.png")
+        plots.wedge_friction(ds, stage / "wedge_friction.png")
+    show = Table(title=f"{ds.attrs['model']}: {vehicle.name}, {r.speed_kmh:g} km/h")
+    for col in table.columns:
+        show.add_column(col)
+    for row in table.itertuples(index=False):
+        show.add_row(*(v if isinstance(v, str) else f"{v:.3g}" for v in row))
+    console.print(show)
+    console.print(f"wrote results.nc, summary.csv and 3 figures to {out}")

@@ -22,21 +22,39 @@ def track_overview(ds, path) -> None:
     fig, axes = plt.subplots(4, 1, figsize=(11, 10), sharex=True)
     for rail in ds.rail.values:
         c = RAIL_COLOURS[str(rail)]
-        axes[0].plot(ds.distance, ds.unloaded_profile.sel(rail=rail) * 1e3, color=c, lw=0.7,
-                     label=f"{rail} unloaded")
-        axes[1].plot(ds.distance, ds.loaded_profile.sel(rail=rail) * 1e3, color=c, lw=0.7,
-                     label=f"{rail} loaded")
-        axes[2].plot(ds.sleeper_distance, ds.k2.sel(rail=rail) / 1e6, color=c, lw=0.7,
-                     label=rail)
+        axes[0].plot(
+            ds.distance,
+            ds.unloaded_profile.sel(rail=rail) * 1e3,
+            color=c,
+            lw=0.7,
+            label=f"{rail} unloaded",
+        )
+        axes[1].plot(
+            ds.distance,
+            ds.loaded_profile.sel(rail=rail) * 1e3,
+            color=c,
+            lw=0.7,
+            label=f"{rail} loaded",
+        )
+        axes[2].plot(ds.sleeper_distance, ds.k2.sel(rail=rail) / 1e6, color=c, lw=0.7, label=rail)
     sd = ds.sd_unloaded.sel(band="D1")
     width = float(sd.segment_end[0] - sd.segment_start[0])
     for j, rail in enumerate(sd.rail.values):
-        axes[3].bar(sd.segment_start + width * (0.25 + 0.5 * j), sd.sel(rail=rail),
-                    width=width * 0.45, color=RAIL_COLOURS[str(rail)], label=str(rail))
+        axes[3].bar(
+            sd.segment_start + width * (0.25 + 0.5 * j),
+            sd.sel(rail=rail),
+            width=width * 0.45,
+            color=RAIL_COLOURS[str(rail)],
+            label=str(rail),
+        )
     for ax in axes[:2]:
         ax.invert_yaxis()
-    labels = ["unloaded profile [mm]\n(down +)", "loaded profile [mm]\n(down +)",
-              "k2 [kN/mm]", "D1 SD per segment [mm]"]
+    labels = [
+        "unloaded profile [mm]\n(down +)",
+        "loaded profile [mm]\n(down +)",
+        "k2 [kN/mm]",
+        "D1 SD per segment [mm]",
+    ]
     for ax, label in zip(axes, labels, strict=True):
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
@@ -63,9 +81,13 @@ def load_deflection(lin, path, n: int = 4) -> None:
         curve = getattr(supports, rail)[i]
         loads = np.linspace(curve.load[0], curve.load[-1], 200)
         ax.plot(curve.deflection * 1e3, curve.load / 1e3, "o", color=colour, ms=4)
-        ax.plot(curve.deflection_at(loads) * 1e3, loads / 1e3, color=colour,
-                label=f"{label}: {rail} rail, {supports.position[i]:.1f} m, "
-                      f"k2 = {k2[r, i] / 1e6:.0f} kN/mm")
+        ax.plot(
+            curve.deflection_at(loads) * 1e3,
+            loads / 1e3,
+            color=colour,
+            label=f"{label}: {rail} rail, {supports.position[i]:.1f} m, "
+            f"k2 = {k2[r, i] / 1e6:.0f} kN/mm",
+        )
         p = np.array([ps - 1.6 * dp, ps + 1.6 * dp])
         ax.plot((lin.ys[r, i] + (p - ps) / k2[r, i]) * 1e3, p / 1e3, "--", color=colour, lw=1)
     for level in (ps - dp, ps, ps + dp):
@@ -83,8 +105,7 @@ def deflection_basin(rail, x0, with_gap, without_gap, load, path) -> None:
     fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 7), sharex=True)
     for sol, label, style in ((without_gap, "no voids", "--"), (with_gap, "measured voids", "-")):
         ax1.plot(sol.x - x0, sol.deflection * 1e3, style, label=label)
-        ax2.plot(sol.support_position - x0, sol.support_force / 1e3, style + "o", ms=3,
-                 label=label)
+        ax2.plot(sol.support_position - x0, sol.support_force / 1e3, style + "o", ms=3, label=label)
     ax1.invert_yaxis()
     ax1.set_ylabel("rail deflection [mm] (down +)")
     ax2.set_ylabel("sleeper load [kN]")
@@ -93,4 +114,67 @@ def deflection_basin(rail, x0, with_gap, without_gap, load, path) -> None:
     for ax in (ax1, ax2):
         ax.grid(alpha=0.3)
         ax.legend()
+    _save(fig, path)
+
+
+def wheel_loads(ds, path) -> None:
+    """Wheel load of each contact along the track, with the track input beneath."""
+    fig, axes = plt.subplots(
+        3, 1, figsize=(11, 9), sharex=True, gridspec_kw={"height_ratios": [2, 1, 1]}
+    )
+    for c in ds.contact.values:
+        x = ds.distance + ds.contact_offset.sel(contact=c)
+        axes[0].plot(x, ds.wheel_load.sel(contact=c) / 1e3, lw=0.7, label=str(c))
+        axes[1].plot(x, ds.wheel_input.sel(contact=c) * 1e3, lw=0.7, label=str(c))
+        axes[2].plot(x, ds.track_stiffness.sel(contact=c) / 1e6, lw=0.7, label=str(c))
+    axes[0].axhline(ds.attrs["static_wheel_load_N"] / 1e3, color="k", lw=0.6, ls=":")
+    axes[1].invert_yaxis()
+    for ax, label in zip(
+        axes,
+        ("wheel load [kN]", "track input [mm]\n(down +)", "track stiffness [kN/mm]"),
+        strict=True,
+    ):
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+        ax.legend(loc="upper right", fontsize=8, ncol=4)
+    axes[-1].set_xlabel("position of the contact along the track [m]")
+    fig.suptitle(
+        f"{ds.attrs['model']}, {ds.attrs['vehicle']}, {ds.attrs['speed_m_per_s'] * 3.6:.0f} km/h"
+    )
+    _save(fig, path)
+
+
+def secondary(ds, path) -> None:
+    """Displacement across each secondary suspension along the track."""
+    fig, ax = plt.subplots(figsize=(11, 4))
+    for s in ds.suspension.values:
+        ax.plot(
+            ds.distance, ds.secondary_displacement.sel(suspension=s) * 1e3, lw=0.7, label=str(s)
+        )
+    ax.set_xlabel("vehicle centre position [m]")
+    ax.set_ylabel("secondary displacement [mm]\n(compression +)")
+    ax.grid(alpha=0.3)
+    if ds.suspension.size:
+        ax.legend(fontsize=8, ncol=4)
+    _save(fig, path)
+
+
+def wedge_friction(ds, path) -> None:
+    """Wedge friction force against relative velocity: the stick band and the slip limits."""
+    fig, ax = plt.subplots(figsize=(7, 5))
+    for s in ds.suspension.values:
+        ax.plot(
+            ds.wedge_velocity.sel(suspension=s) * 1e3,
+            ds.wedge_force.sel(suspension=s) / 1e3,
+            ".",
+            ms=1,
+            alpha=0.5,
+            label=str(s),
+        )
+    ax.set_xlabel("relative velocity [mm/s] (compression +)")
+    ax.set_ylabel("wedge friction force [kN]")
+    ax.set_title("Friction wedges: stick (sloped band) and slip (flat limits)")
+    ax.grid(alpha=0.3)
+    if ds.suspension.size:
+        ax.legend(markerscale=8, fontsize=8)
     _save(fig, path)

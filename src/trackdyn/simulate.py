@@ -180,7 +180,7 @@ def simulate(
         )
     n_steps = int(np.floor((c1 - c0) / (speed * dt))) + 1
     inputs = _Inputs(m, lin, nonlinear)
-    P1, P2, Gc, Gw, H = step_matrices(m.M, m.C, m.K, m.Dc, m.Dw, dt)
+    mats = step_matrices(m.M, m.C, m.K, m.Dc, m.Dw, dt)
     k0, r0, t0 = inputs(np.array([c0]))
     q0 = _static_state(m, k0[0], r0[0], t0, getattr(inputs, "grid", None))
     qm1 = q0.copy()
@@ -210,7 +210,7 @@ def simulate(
         keep = steps % store_every == 0
         sl = slice(stored, stored + int(keep.sum()))
         status = integrate_chunk(
-            P1, P2, Gc, Gw, m.Dc, m.Dw, H, m.wedge_params, m.static_wheel_load,
+            *mats[:4], m.Dc, m.Dw, mats[4], m.wedge_params, m.static_wheel_load,
             k, r, table, grid[0], grid[1] - grid[0],
             q0, qm1, dt, first, store_every, newton_tol, newton_max_iter,
             out["q"][sl], out["v"][sl], out["a"][sl], out["fc"][sl], out["fw"][sl],

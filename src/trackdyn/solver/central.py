@@ -36,7 +36,7 @@ def wedge_law(v, f_up, f_down, c_slope):
     return f, c_slope
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always", error_model="numpy")
 def _solve_small(a, b, n):
     """Solve ``a x = b`` in place (Gaussian elimination, partial pivoting); returns ``b``."""
     for k in range(n):
@@ -74,9 +74,9 @@ def contact_table_force(table, y_start, y_step, deflection):
     return table[j] + (u - j) * (table[j + 1] - table[j])
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=True, error_model="numpy")
 def integrate_chunk(
-    P1, P2, Gc, Gw, Dc, Dw, H, wedge, static_load,
+    P1t, P2t, Gct, Gwt, Dc, Dw, H, wedge, static_load,
     k_in, r_in, table, y_start, y_step,
     q0, qm1, dt, step0, store_every, tol, max_iter,
     out_q, out_v, out_a, out_fc, out_fw, out_d, out_vw,
@@ -119,13 +119,18 @@ def integrate_chunk(
                 fc[c] -= static_load
             else:
                 fc[c] = k_in[s, c] * (x - r_in[s, c])
+        # column sweeps over the transposed matrices: independent updates, no long chains
         for i in range(n):
-            acc = 0.0
-            for j in range(n):
-                acc += P1[i, j] * q0[j] - P2[i, j] * qm1[j]
-            for c in range(nc):
-                acc -= Gc[i, c] * fc[c]
-            q1[i] = acc
+            q1[i] = 0.0
+        for j in range(n):
+            a = q0[j]
+            b = qm1[j]
+            for i in range(n):
+                q1[i] += P1t[j, i] * a - P2t[j, i] * b
+        for c in range(nc):
+            f = fc[c]
+            for i in range(n):
+                q1[i] -= Gct[c, i] * f
         if nw > 0:
             for w in range(nw):
                 dd = 0.0
@@ -166,9 +171,10 @@ def integrate_chunk(
                 return s
             for w in range(nw):
                 F[w], dF[w] = wedge_law(v[w], f_up[w], f_down[w], wedge[w, 4])
-            for i in range(n):
-                for w in range(nw):
-                    q1[i] -= Gw[i, w] * F[w]
+            for w in range(nw):
+                f = F[w]
+                for i in range(n):
+                    q1[i] -= Gwt[w, i] * f
         if (step0 + s) % store_every == 0:
             for i in range(n):
                 out_q[stored, i] = q0[i]
@@ -188,7 +194,8 @@ def integrate_chunk(
 
 
 def step_matrices(M, C, K, Dc, Dw, dt):
-    """Constant matrices of the scheme: ``P1, P2, Gc, Gw, H`` (see the module docstring)."""
+    """Constant matrices of the scheme, transposed for the loop: ``P1^T, P2^T, Gc^T, Gw^T``
+    and ``H`` (see the module docstring)."""
     A = M / dt**2 + C / (2 * dt)
     Ainv = np.linalg.inv(A)
     P1 = Ainv @ (2 * M / dt**2 - K)
@@ -196,7 +203,7 @@ def step_matrices(M, C, K, Dc, Dw, dt):
     Gc = Ainv @ Dc.T
     Gw = Ainv @ Dw.T
     H = Dw @ Gw / (2 * dt)
-    return P1, P2, Gc, Gw, H
+    return (*(np.ascontiguousarray(x.T) for x in (P1, P2, Gc, Gw)), H)
 
 
 def highest_frequency(M, K) -> float:

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import tomllib
 from dataclasses import dataclass, field
 from importlib.resources import files
 from pathlib import Path
 
 from trackdyn.errors import TrackdynInputError
+from trackdyn.scenario import read_toml
 
 GRAVITY = 9.81
 """Gravitational acceleration [m/s^2]."""
@@ -135,16 +135,6 @@ class Vehicle:
         return {k: getattr(self, k) for k in PARAMETERS}
 
 
-def _read_toml(path) -> dict:
-    try:
-        with open(path, "rb") as fh:
-            return tomllib.load(fh)
-    except OSError:
-        raise TrackdynInputError(f"{path}: cannot read vehicle file") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise TrackdynInputError(f"{path}: not valid TOML ({exc})") from None
-
-
 def _resolve(name_or_path) -> Path:
     path = Path(str(name_or_path))
     if path.suffix == ".toml":
@@ -174,7 +164,7 @@ def load_vehicle(name_or_path, **overrides) -> Vehicle:
         Parameter values replacing the file's [SI units].
     """
     path = _resolve(name_or_path)
-    data = _read_toml(path)
+    data = read_toml(path)
     values, sources = {}, {}
     if "base" in data:
         base = load_vehicle(data.pop("base"))

@@ -1,0 +1,122 @@
+"""CSV readers: units from column names, and every kind of bad input refused by name."""
+
+import numpy as np
+import pytest
+
+from trackdyn.errors import TrackdynInputError
+from trackdyn.io import read_geometry, read_supports, write_geometry, write_supports
+from trackdyn.track.track import Geometry, Supports
+
+
+def write(tmp_path, text, name="f.csv"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def test_geometry_units_convert_to_si(tmp_path):
+    g = read_geometry(write(tmp_path, "distance_km,left_mm,right_m\n0,1,0.002\n0.001,2,0.003\n"))
+    np.testing.assert_array_equal(g.distance, [0.0, 1.0])  # km -> m
+    np.testing.assert_allclose(g.left, [1e-3, 2e-3])  # mm -> m
+    np.testing.assert_allclose(g.right, [2e-3, 3e-3])
+
+
+def test_supports_long_table_and_linear(tmp_path):
+    s = read_supports(
+        write(
+            tmp_path,
+            "distance_m,rail,load_kN,deflection_mm\n"
+            "0.3,left,0,0\n0.3,left,100,1\n0.3,right,0,0\n0.3,right,200,2\n"
+            "0.9,left,0,0\n0.9,left,100,2\n0.9,right,0,0\n0.9,right,100,1\n",
+        )
+    )
+    np.testing.assert_array_equal(s.position, [0.3, 0.9])
+    np.testing.assert_allclose(s.left[1].load, [0, 100e3])
+    np.testing.assert_allclose(s.left[1].deflection, [0, 2e-3])
+    lin = read_supports(
+        write(
+            tmp_path,
+            "distance_m,rail,stiffness_kN_per_mm\n"
+            "0.3,left,90\n0.9,left,90\n0.3,right,110\n0.9,right,100\n",
+            "lin.csv",
+        )
+    )
+    # 90 kN/mm = 90e6 N/m: the curve's slope
+    assert lin.left[0].load[-1] / lin.left[0].deflection[-1] == pytest.approx(90e6)
+
+
+def test_round_trip(tmp_path):
+    g = Geometry(np.array([0.0, 0.25, 0.5]), np.array([1e-3, 0, -1e-3]), np.zeros(3))
+    s = Supports.linear(np.array([0.1, 0.7]), 80e6, np.array([90e6, 95e6]))
+    write_geometry(g, tmp_path / "g.csv")
+    write_supports(s, tmp_path / "s.csv")
+    g2, s2 = read_geometry(tmp_path / "g.csv"), read_supports(tmp_path / "s.csv")
+    np.testing.assert_allclose(g2.left, g.left)
+    np.testing.assert_allclose(s2.right[1].deflection, s.right[1].deflection, rtol=1e-5)
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        ("distance_m,left_mm,right_mm\n0,1,1\n1,nan,1\n", r"'left_mm'.*row 3"),
+        ("distance_m,left_mm,right_mm\n0,1,1\n1,inf,1\n", r"'left_mm'.*row 3"),
+        ("distance_m,left_mm,right_mm\n0,1,1\n0,1,1\n", "not strictly increasing at line 3"),
+        ("distance_m,left_mm,right_mm\n1,1,1\n0,1,1\n", "not strictly increasing at line 3"),
+        ("distance_m,left_mm\n0,1\n1,1\n", "no column right_"),
+        ("distance_m,left_inch,right_mm\n0,1,1\n1,1,1\n", "unit 'inch'.*does not parse"),
+        ("distance_m,left_mm,right_mm\n0,1,1\n1,abc,1\n", r"'left_mm'.*row 3"),
+    ],
+)
+def test_bad_geometry(tmp_path, text, match):
+    path = write(tmp_path, text, "geo.csv")
+    with pytest.raises(TrackdynInputError, match=match) as err:
+        read_geometry(path)
+    assert "geo.csv" in str(err.value) and "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        (
+            "distance_m,rail,load_kN,deflection_mm\n0.3,left,0,0\n0.3,left,100,1\n",
+            "no rows for the right rail",
+        ),
+        (
+            "distance_m,rail,load_kN,deflection_mm\n0.3,left,0,0\n0.3,left,100,1\n0.3,middle,0,0\n",
+            "line 4: rail 'middle'",
+        ),
+        (
+            "distance_m,rail,load_kN,deflection_mm\n0.3,left,0,0\n0.3,left,100,0.9\n"
+            "0.3,left,150,0.8\n0.3,right,0,0\n0.3,right,100,1\n",
+            r"left rail at 0.3 m \(lines 2-4\).*not monotonic",
+        ),
+        (
+            "distance_m,rail,stiffness_kN_per_mm\n0.3,left,-5\n0.3,right,90\n",
+            "stiffness must be > 0",
+        ),
+        (
+            "distance_m,rail,stiffness_kN_per_mm\n0.3,left,0\n0.3,right,90\n",
+            "stiffness must be > 0",
+        ),
+        (
+            "distance_m,rail,stiffness_kN_per_mm\n0.9,left,80\n0.3,left,90\n0.3,right,90\n"
+            "0.9,right,90\n",
+            "line 3: sleeper positions of the left rail are not increasing",
+        ),
+        ("distance_m,rail,load_lbf,deflection_mm\n0.3,left,0,0\n", "unit 'lbf'"),
+        (
+            "distance_m,rail,stiffness_kN_per_mm\n0.3,left,80\n0.6,right,90\n",
+            "different sleeper positions",
+        ),
+    ],
+)
+def test_bad_supports(tmp_path, text, match):
+    path = write(tmp_path, text, "sup.csv")
+    with pytest.raises(TrackdynInputError, match=match) as err:
+        read_supports(path)
+    assert "sup.csv" in str(err.value)
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(TrackdynInputError, match="no such file"):
+        read_geometry(tmp_path / "nope.csv")
