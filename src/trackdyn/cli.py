@@ -87,7 +87,7 @@ def track(
     trk = load_track(geometry, supports)
     lin = trk.linearise(wheel_load_kN * 1e3, delta, extrapolate=extrapolate)
     ds = track_dataset(lin)
-    basin = voided_basin(lin, section.EI)
+    basin = voided_basin(lin, section)
     with staged_output(out) as stage:
         ds.to_netcdf(stage / "track.nc")
         plots.track_overview(ds, stage / "track_overview.png")

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import xarray as xr
 
-from trackdyn.track.beam import BeamSolution, linear_supports, solve_beam
+from trackdyn.track.beam import linear_supports, solve_beam
 from trackdyn.track.quality import longitudinal_level, segment_sd
 from trackdyn.track.track import RAILS, LinearisedTrack
+from trackdyn.vehicle.parameters import GRAVITY
 
 QUALITY_BANDS = ("D1", "D2")
 
@@ -28,8 +31,9 @@ def quality_table(distance, profiles: dict, segment_length: float = 200.0) -> xr
     for band in QUALITY_BANDS:
         per_rail = []
         for rail in profiles:
-            table = segment_sd(distance, longitudinal_level(distance, profiles[rail], band),
-                               segment_length)
+            table = segment_sd(
+                distance, longitudinal_level(distance, profiles[rail], band), segment_length
+            )
             per_rail.append(table["sd_mm"].to_numpy())
             segments = table
         values.append(per_rail)
@@ -39,8 +43,7 @@ def quality_table(distance, profiles: dict, segment_length: float = 200.0) -> xr
         coords={
             "band": list(QUALITY_BANDS),
             "rail": list(profiles),
-            "segment_start": ("segment", segments["segment_start_m"].to_numpy(),
-                              {"units": "m"}),
+            "segment_start": ("segment", segments["segment_start_m"].to_numpy(), {"units": "m"}),
             "segment_end": ("segment", segments["segment_end_m"].to_numpy(), {"units": "m"}),
         },
         attrs={"units": "mm", "long_name": "standard deviation of longitudinal level"},
@@ -71,16 +74,26 @@ def track_dataset(lin: LinearisedTrack) -> xr.Dataset:
     loaded = {r: lin.loaded_profile(r)[inside] for r in RAILS}
     ds = xr.Dataset(
         {
-            "unloaded_profile": (("rail", "distance"), np.array([unloaded[r] for r in RAILS]),
-                                 {"units": "m", "long_name": "unloaded vertical space curve",
-                                  "positive": "down"}),
-            "loaded_profile": (("rail", "distance"), np.array([loaded[r] for r in RAILS]),
-                               {"units": "m", "long_name": "loaded profile (unloaded + ys)",
-                                "positive": "down"}),
-            "k2": (("rail", "sleeper"), lin.k2,
-                   {"units": "N/m", "long_name": "effective linearised loaded stiffness (5.10)"}),
-            "ys": (("rail", "sleeper"), lin.ys,
-                   {"units": "m", "long_name": "static track deflection (5.11)"}),
+            "unloaded_profile": (
+                ("rail", "distance"),
+                np.array([unloaded[r] for r in RAILS]),
+                {"units": "m", "long_name": "unloaded vertical space curve", "positive": "down"},
+            ),
+            "loaded_profile": (
+                ("rail", "distance"),
+                np.array([loaded[r] for r in RAILS]),
+                {"units": "m", "long_name": "loaded profile (unloaded + ys)", "positive": "down"},
+            ),
+            "k2": (
+                ("rail", "sleeper"),
+                lin.k2,
+                {"units": "N/m", "long_name": "effective linearised loaded stiffness (5.10)"},
+            ),
+            "ys": (
+                ("rail", "sleeper"),
+                lin.ys,
+                {"units": "m", "long_name": "static track deflection (5.11)"},
+            ),
             "sd_unloaded": quality_table(x, unloaded),
             "sd_loaded": quality_table(x, loaded),
         },
@@ -89,25 +102,30 @@ def track_dataset(lin: LinearisedTrack) -> xr.Dataset:
             "distance": ("distance", x, {"units": "m"}),
             "sleeper_distance": ("sleeper", pos, {"units": "m"}),
         },
-        attrs={"static_wheel_load_N": lin.static_load, "delta": lin.delta,
-               "geometry_source": g.where, "supports_source": lin.track.supports.where},
+        attrs={
+            "static_wheel_load_N": lin.static_load,
+            "delta": lin.delta,
+            "geometry_source": g.where,
+            "supports_source": lin.track.supports.where,
+        },
     )
     return ds
 
 
-def voided_basin(lin: LinearisedTrack, EI: float, window: float = 12.0):
+def voided_basin(lin: LinearisedTrack, rail_section, window: float = 12.0):
     """Deflection basin under the static wheel load over the most voided sleeper.
 
-    The supports within ``window`` [m] each side become linear springs with the stiffness
-    equivalent to k2 (5.7 times the spacing) behind their seating gap; the same beam
-    without gaps is the reference.
+    The supports within ``window`` [m] each side become tensionless linear springs with the
+    stiffness equivalent to k2 (5.7 times the spacing) behind their seating gap; the same
+    beam without gaps is the reference. The rail's own weight rests on the supports (it
+    keeps the unloaded rail from lifting off); the basin shown is the wheel's addition.
 
     Parameters
     ----------
     lin : LinearisedTrack
         Linearised track.
-    EI : float
-        Rail bending stiffness [N m^2].
+    rail_section : RailSection
+        Rail section (bending stiffness and mass per metre).
     window : float
         Half length of the modelled rail [m].
 
@@ -118,15 +136,27 @@ def voided_basin(lin: LinearisedTrack, EI: float, window: float = 12.0):
     position : float
         Its position [m].
     with_gap, without_gap : BeamSolution
+        Basins with the wheel, less the rail's own-weight state.
     """
     gaps = lin.seating_gap()
     r, i = np.unravel_index(np.argmax(gaps), gaps.shape)
     pos = lin.track.supports.position
     x0 = pos[i]
     near = np.abs(pos - x0) <= window
-    k = lin.support_stiffness(EI)[r, near]
-    solutions: list[BeamSolution] = [
-        solve_beam(linear_supports(pos[near], k, gap), EI, x0, lin.static_load)
-        for gap in (gaps[r, near], 0.0)
-    ]
+    x = pos[near]
+    k = lin.support_stiffness(rail_section.EI)[r, near]
+    weight = rail_section.mass * GRAVITY * np.gradient(x)
+    solutions = []
+    for gap in (gaps[r, near], 0.0):
+        supports = linear_supports(x, k, gap)
+        rest = solve_beam(supports, rail_section.EI, x, weight)
+        loaded = solve_beam(supports, rail_section.EI, np.r_[x, x0], np.r_[weight, lin.static_load])
+        solutions.append(
+            replace(
+                loaded,
+                deflection=loaded.deflection - rest.deflection_at(loaded.x),
+                support_deflection=loaded.support_deflection - rest.support_deflection,
+                support_force=loaded.support_force - rest.support_force,
+            )
+        )
     return RAILS[r], float(x0), solutions[0], solutions[1]

@@ -227,11 +227,11 @@ EXAMPLE_FEATURES = (
 
 
 def example_track() -> Track:
-    """The built-in example: 1 km, FRA class 4 geometry, soft spot, voids and a bridge.
+    """The built-in example: 1 km of heavy-haul track with a soft spot, voids and a bridge.
 
-    A soft spot at 300 m, three voided sleepers on the left rail at 500 m, and a 40 m
-    stiff structure from 700 m, on a varying stiffness field of 100 kN/mm mean.
+    FRA class 5 geometry; a soft spot at 300 m, three voided sleepers on the left rail at
+    500 m and a 40 m stiff structure from 700 m, on a stiffness field of 100 kN/mm mean.
     """
     return synthetic_track(
-        1000.0, spectrum="fra4", seed=2026, features=EXAMPLE_FEATURES, where="built-in example"
+        1000.0, spectrum="fra5", seed=2026, features=EXAMPLE_FEATURES, where="built-in example"
     )
