@@ -58,13 +58,13 @@ def test_round_trip(tmp_path):
 @pytest.mark.parametrize(
     ("text", "match"),
     [
-        ("distance_m,left_mm,right_mm\n0,1,1\n1,nan,1\n", r"'left_mm'.*row 3"),
-        ("distance_m,left_mm,right_mm\n0,1,1\n1,inf,1\n", r"'left_mm'.*row 3"),
+        ("distance_m,left_mm,right_mm\n0,1,1\n1,nan,1\n", r"'left_mm'.*line 3"),
+        ("distance_m,left_mm,right_mm\n0,1,1\n1,inf,1\n", r"'left_mm'.*line 3"),
         ("distance_m,left_mm,right_mm\n0,1,1\n0,1,1\n", "not strictly increasing at line 3"),
         ("distance_m,left_mm,right_mm\n1,1,1\n0,1,1\n", "not strictly increasing at line 3"),
         ("distance_m,left_mm\n0,1\n1,1\n", "no column right_"),
         ("distance_m,left_inch,right_mm\n0,1,1\n1,1,1\n", "unit 'inch'.*does not parse"),
-        ("distance_m,left_mm,right_mm\n0,1,1\n1,abc,1\n", r"'left_mm'.*row 3"),
+        ("distance_m,left_mm,right_mm\n0,1,1\n1,abc,1\n", r"'left_mm'.*line 3"),
     ],
 )
 def test_bad_geometry(tmp_path, text, match):

@@ -28,3 +28,28 @@ def require_positive(name: str, value) -> np.ndarray:
     if arr.size == 0 or not np.all(np.isfinite(arr)) or np.any(arr <= 0):
         raise TrackdynInputError(f"{name} must be finite and > 0, got {value!r}")
     return arr
+
+
+def check_series(
+    distance, values=None, *, name: str = "profile", min_points: int = 1, where: str = ""
+):
+    """Validate ``distance`` [m] (1-D, finite, strictly increasing) and optional ``values``.
+
+    Returns ``x`` or ``(x, values)`` as float arrays. Errors name the first bad row; ``name``
+    names the values and ``where`` (a file or data set) the source in messages.
+    """
+    at = f"{where}: " if where else ""
+    x = np.asarray(distance, dtype=float)
+    if x.ndim != 1 or x.size < min_points:
+        raise TrackdynInputError(f"{at}distance must be 1-D with at least {min_points} points")
+    z = x if values is None else np.asarray(values, dtype=float)
+    if z.shape != x.shape:
+        raise TrackdynInputError(f"{at}{name} has shape {z.shape} but distance has {x.shape}")
+    for label, arr in (("distance", x), (name, z)):
+        bad = np.flatnonzero(~np.isfinite(arr))
+        if bad.size:
+            raise TrackdynInputError(f"{at}{label} is NaN or infinite at row {bad[0]}")
+    bad = np.flatnonzero(np.diff(x) <= 0)
+    if bad.size:
+        raise TrackdynInputError(f"{at}distance is not strictly increasing at row {bad[0] + 1}")
+    return x if values is None else (x, z)

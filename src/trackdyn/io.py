@@ -17,9 +17,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from trackdyn.errors import TrackdynInputError
+from trackdyn.errors import TrackdynInputError, check_series
 from trackdyn.track.support import SupportCurve
-from trackdyn.track.track import RAILS, Geometry, Supports, check_distance
+from trackdyn.track.track import RAILS, Geometry, Supports
 
 UNITS = {
     "length": {"m": 1.0, "mm": 1e-3, "km": 1e3},
@@ -68,7 +68,7 @@ def column(frame: pd.DataFrame, quantity: str, kind: str, where) -> tuple[np.nda
     bad = np.flatnonzero(~np.isfinite(values))
     if bad.size:
         raise TrackdynInputError(
-            f"{where}: column {name!r} is empty, NaN, infinite or not a number at row {bad[0] + 2}"
+            f"{where}: column {name!r} is empty, NaN, infinite or not a number at line {bad[0] + 2}"
         )
     return values * UNITS[kind][unit], name
 
@@ -78,7 +78,7 @@ def read_geometry(path) -> Geometry:
     frame = _read_csv(path)
     distance, _ = column(frame, "distance", "length", path)
     try:
-        check_distance(distance, str(path))
+        check_series(distance, min_points=2, where=str(path))
     except TrackdynInputError as exc:  # rows in the file count the header line
         raise TrackdynInputError(_file_rows(str(exc))) from None
     left, _ = column(frame, "left", "length", path)

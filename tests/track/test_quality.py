@@ -117,7 +117,7 @@ def test_bad_inputs():
     z = sine(X, 10.0)
     bad = z.copy()
     bad[7] = np.nan
-    with pytest.raises(TrackdynInputError, match="profile is not finite at row 7"):
+    with pytest.raises(TrackdynInputError, match="profile is NaN or infinite at row 7"):
         longitudinal_level(X, bad)
     x = X.copy()
     x[11] = x[10]
@@ -137,5 +137,5 @@ def test_bad_inputs():
         longitudinal_level(X, z, band=(25.0, 3.0))
     with pytest.raises(TrackdynInputError, match="segment_length"):
         segment_sd(X, z, segment_length=0.0)
-    with pytest.raises(TrackdynInputError, match="level is not finite at row 7"):
+    with pytest.raises(TrackdynInputError, match="level is NaN or infinite at row 7"):
         segment_sd(X, bad)

@@ -118,7 +118,7 @@ def test_bad_inputs():
         generate_profile(bad, "fra4")
     bad = x.copy()
     bad[5] = np.nan
-    with pytest.raises(TrackdynInputError, match="distance is not finite at row 5"):
+    with pytest.raises(TrackdynInputError, match="distance is NaN or infinite at row 5"):
         generate_profile(bad, "fra4")
     with pytest.raises(TrackdynInputError, match="wavelength_range"):
         generate_profile(x, "fra4", wavelength_range=(10.0, 1.0))
@@ -126,7 +126,7 @@ def test_bad_inputs():
         generate_profile(x, "fra4", n_harmonics=0)
     z = np.zeros_like(x)
     z[9] = np.inf
-    with pytest.raises(TrackdynInputError, match="profile is not finite at row 9"):
+    with pytest.raises(TrackdynInputError, match="profile is NaN or infinite at row 9"):
         estimate_psd(x, z)
     with pytest.raises(TrackdynInputError, match="nperseg"):
         estimate_psd(x, np.zeros_like(x), nperseg=10 * x.size)

@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 from scipy import signal
 
-from trackdyn.errors import TrackdynInputError
+from trackdyn.errors import TrackdynInputError, check_series
 
 WAVEBANDS: dict[str, tuple[float, float]] = {
     "D1": (3.0, 25.0),
@@ -22,28 +22,6 @@ WAVEBANDS: dict[str, tuple[float, float]] = {
     "D3": (70.0, 150.0),
 }
 """EN 13848-1 wavebands, (shortest, longest) wavelength [m]."""
-
-
-def check_series(distance, values=None, *, name: str = "profile", min_points: int = 1):
-    """Validate ``distance`` [m] (1-D, finite, strictly increasing) and optional ``values``.
-
-    Returns ``x`` or ``(x, values)`` as float arrays. Errors name the first bad row; ``name``
-    names the values in messages.
-    """
-    x = np.asarray(distance, dtype=float)
-    if x.ndim != 1 or x.size < min_points:
-        raise TrackdynInputError(f"distance must be 1-D with at least {min_points} points")
-    z = x if values is None else np.asarray(values, dtype=float)
-    if z.shape != x.shape:
-        raise TrackdynInputError(f"{name} has shape {z.shape} but distance has {x.shape}")
-    for label, arr in (("distance", x), (name, z)):
-        bad = np.flatnonzero(~np.isfinite(arr))
-        if bad.size:
-            raise TrackdynInputError(f"{label} is not finite at row {bad[0]}")
-    bad = np.flatnonzero(np.diff(x) <= 0)
-    if bad.size:
-        raise TrackdynInputError(f"distance is not strictly increasing at row {bad[0] + 1}")
-    return x if values is None else (x, z)
 
 
 def to_uniform_grid(x: np.ndarray, z: np.ndarray, rtol: float = 1e-6):

@@ -20,8 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import signal
 
-from trackdyn.errors import TrackdynInputError
-from trackdyn.track.quality import check_series, to_uniform_grid
+from trackdyn.errors import TrackdynInputError, check_series
+from trackdyn.track.quality import to_uniform_grid
 
 
 @dataclass(frozen=True)

@@ -6,37 +6,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from trackdyn.errors import TrackdynInputError
+from trackdyn.errors import TrackdynInputError, check_series
 from trackdyn.track.support import SupportCurve, secant_linearisation
 from trackdyn.track.winkler import modulus_from_stiffness
 
 RAILS = ("left", "right")
-
-
-def check_distance(distance, where: str) -> np.ndarray:
-    """Return ``distance`` [m] as a float array after checking it is finite and increasing."""
-    d = np.asarray(distance, dtype=float)
-    if d.ndim != 1 or d.size < 2:
-        raise TrackdynInputError(f"{where}: needs at least two distances")
-    bad = np.flatnonzero(~np.isfinite(d))
-    if bad.size:
-        raise TrackdynInputError(f"{where}: distance is NaN or infinite at row {bad[0]}")
-    bad = np.flatnonzero(np.diff(d) <= 0)
-    if bad.size:
-        raise TrackdynInputError(
-            f"{where}: distances not strictly increasing at row {bad[0] + 1} "
-            f"({d[bad[0]]:g} m then {d[bad[0] + 1]:g} m)"
-        )
-    return d
-
-
-def check_finite(values, name: str, where: str) -> np.ndarray:
-    """Return ``values`` as a float array after checking every entry is finite."""
-    v = np.asarray(values, dtype=float)
-    bad = np.flatnonzero(~np.isfinite(v))
-    if bad.size:
-        raise TrackdynInputError(f"{where}: {name} is NaN or infinite at row {bad[0]}")
-    return v
 
 
 @dataclass(frozen=True)
@@ -59,14 +33,10 @@ class Geometry:
     where: str = "geometry"
 
     def __post_init__(self):
-        d = check_distance(self.distance, self.where)
+        d = check_series(self.distance, min_points=2, where=self.where)
         object.__setattr__(self, "distance", d)
         for rail in RAILS:
-            v = check_finite(getattr(self, rail), f"{rail} profile", self.where)
-            if v.shape != d.shape:
-                raise TrackdynInputError(
-                    f"{self.where}: {rail} profile length differs from distance"
-                )
+            _, v = check_series(d, getattr(self, rail), name=f"{rail} profile", where=self.where)
             object.__setattr__(self, rail, v)
 
     def profile(self, rail: str) -> np.ndarray:
@@ -96,7 +66,7 @@ class Supports:
     where: str = "supports"
 
     def __post_init__(self):
-        pos = check_distance(self.position, self.where)
+        pos = check_series(self.position, min_points=2, where=self.where)
         object.__setattr__(self, "position", pos)
         for rail in RAILS:
             curves = tuple(getattr(self, rail))

@@ -1,0 +1,160 @@
+"""The command line: outputs of each command, and bad input refused with exit code 2."""
+
+import numpy as np
+import pytest
+import xarray as xr
+from typer.testing import CliRunner
+
+from trackdyn.cli import app
+from trackdyn.io import write_geometry, write_supports
+from trackdyn.track.synthetic import synthetic_track
+
+runner = CliRunner()
+
+
+@pytest.fixture(scope="module")
+def short_track(tmp_path_factory):
+    """A 300 m synthetic section written as CSV files."""
+    folder = tmp_path_factory.mktemp("track")
+    trk = synthetic_track(300.0, spectrum="fra5", seed=3)
+    write_geometry(trk.geometry, folder / "geometry.csv")
+    write_supports(trk.supports, folder / "supports.csv")
+    return folder
+
+
+def test_version_and_help():
+    result = runner.invoke(app, ["--version"])
+    assert result.exit_code == 0 and result.stdout.startswith("trackdyn ")
+    result = runner.invoke(app, ["--help"])
+    assert result.exit_code == 0 and "track" in result.stdout and "run" in result.stdout
+
+
+def test_track_command_on_user_files(short_track, tmp_path):
+    out = tmp_path / "out"
+    result = runner.invoke(
+        app,
+        [
+            "track",
+            "--geometry",
+            str(short_track / "geometry.csv"),
+            "--supports",
+            str(short_track / "supports.csv"),
+            "--out",
+            str(out),
+        ],
+    )
+    assert result.exit_code == 0, result.output
+    names = {p.name for p in out.iterdir()}
+    assert names == {
+        "track.nc",
+        "track_overview.png",
+        "load_deflection.png",
+        "deflection_basin.png",
+    }
+    ds = xr.load_dataset(out / "track.nc")
+    assert ds.k2.attrs["units"] == "N/m" and ds.k2.shape == (2, 500)  # 300 m / 0.6 m
+    # loaded = unloaded + ys, 127.5 kN default wheel load
+    ys_on_grid = np.interp(ds.distance, ds.sleeper_distance, ds.ys.sel(rail="left"))
+    np.testing.assert_allclose(
+        ds.loaded_profile.sel(rail="left"),
+        ds.unloaded_profile.sel(rail="left") + ys_on_grid,
+        atol=1e-12,
+    )
+    assert set(ds.sd_unloaded.band.values) == {"D1", "D2"}
+
+
+def test_run_command_with_scenario(short_track, tmp_path):
+    scenario = tmp_path / "s.toml"
+    scenario.write_text(
+        '[vehicle]\npreset = "empty"\n'
+        f'[track]\ngeometry = "{short_track / "geometry.csv"}"\n'
+        f'supports = "{short_track / "supports.csv"}"\n'
+        '[run]\nmodel = "7dof"\nspeed_kmh = 40\nstore_every = 4\n'
+    )
+    out = tmp_path / "out"
+    result = runner.invoke(app, ["run", str(scenario), "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    assert {p.name for p in out.iterdir()} == {
+        "results.nc",
+        "summary.csv",
+        "wheel_loads.png",
+        "secondary_displacement.png",
+        "wedge_friction.png",
+    }
+    ds = xr.load_dataset(out / "results.nc")
+    assert list(ds.contact.values) == ["FL", "FR", "BL", "BR"]
+    assert ds.attrs["model"] == "7dof"
+
+
+BAD_SCENARIOS = [
+    ("[vehicle]\noverrides = { muu = 0.3 }\n", "unknown vehicle parameter 'muu'"),
+    ("[vehicle]\noverrides = { mu = 0.9 }\n", "locks the wedge"),
+    ("[vehicle]\noverrides = { k1 = -5.0 }\n", "k1 must be > 0"),
+    ('[vehicle]\npreset = "tanker"\n', "unknown vehicle preset 'tanker'"),
+    ("[run]\nspeed_kmh = 0\n", "run.speed_kmh"),
+    ("[run]\nspeed_kmh = 60\ndt_s = 0.01\n", "beyond the stability limit"),
+    ('[run]\nmodel = "3dof"\n', "run.model"),
+    ("[run]\nspeeed = 3\n", "run.speeed"),
+    ('[track]\ngeometry = "missing.csv"\nsupports = "missing.csv"\n', "missing.csv: no such file"),
+    ('[track]\ngeometry = "missing.csv"\n', "give both --geometry and --supports"),
+    ("not toml [", "not valid TOML"),
+]
+
+
+@pytest.mark.parametrize(("text", "message"), BAD_SCENARIOS)
+def test_run_refuses_bad_scenarios(tmp_path, text, message):
+    scenario = tmp_path / "bad.toml"
+    scenario.write_text(text)
+    out = tmp_path / "out"
+    result = runner.invoke(app, ["run", str(scenario), "--out", str(out)])
+    assert result.exit_code == 2, result.output
+    assert message in result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1  # one line, no traceback
+    assert not out.exists() or not any(out.iterdir())  # nothing written
+
+
+def test_short_track_refused(tmp_path):
+    trk = synthetic_track(8.0, spectrum=None, seed=1)  # shorter than the 10.4 m axle span
+    write_geometry(trk.geometry, tmp_path / "g.csv")
+    write_supports(trk.supports, tmp_path / "s.csv")
+    scenario = tmp_path / "s.toml"
+    scenario.write_text('[track]\ngeometry = "g.csv"\nsupports = "s.csv"\n')
+    result = runner.invoke(app, ["run", str(scenario), "--out", str(tmp_path / "o")])
+    assert result.exit_code == 2 and "shorter than the vehicle's path" in result.stderr
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--wheel-load-kN", "0"], "--wheel-load-kN must be finite and > 0"),
+        (["--wheel-load-kN", "-3"], "--wheel-load-kN must be finite and > 0"),
+        (["--rail", "UIC99"], "unknown rail section"),
+        (["--wheel-load-kN", "400"], "outside the measured curve"),
+        (["--delta", "1.5"], "delta must be in (0, 1)"),
+    ],
+)
+def test_track_refuses_bad_options(tmp_path, args, message):
+    out = tmp_path / "out"
+    result = runner.invoke(app, ["track", *args, "--out", str(out)])
+    assert result.exit_code == 2, result.output
+    assert message in result.stderr
+    assert not out.exists() or not any(out.iterdir())
+
+
+def test_track_refuses_bad_file(tmp_path, short_track):
+    bad = tmp_path / "geometry.csv"
+    bad.write_text("distance_m,left_mm,right_mm\n0,1,1\n0.25,nan,1\n")
+    result = runner.invoke(
+        app,
+        [
+            "track",
+            "--geometry",
+            str(bad),
+            "--supports",
+            str(short_track / "supports.csv"),
+            "--out",
+            str(tmp_path / "o"),
+        ],
+    )
+    assert result.exit_code == 2
+    assert "geometry.csv" in result.stderr and "line 3" in result.stderr
