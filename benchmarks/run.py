@@ -29,7 +29,7 @@ def kernel_args(model, n_steps, dt, rng):
     nc, n, nw = len(m.contact_names), len(m.dof_names), len(m.wedge_names)
     k = np.full((n_steps, nc), 2e8 if nc > 1 else 1e8)
     r = 1e-3 * np.sin(np.arange(n_steps)[:, None] * dt * 2 * np.pi * 8 + rng.random(nc))
-    out = [np.empty((n_steps, w)) for w in (n, n, n, nc, nw, nw, nw)]
+    out = [np.empty((n_steps, w)) for w in (n, n, n, nc, nw, nw)]
     return (
         *mats[:4],
         m.Dc,

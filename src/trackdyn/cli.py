@@ -164,3 +164,52 @@ def run(
         show.add_row(*(v if isinstance(v, str) else f"{v:.3g}" for v in row))
     console.print(show)
     console.print(f"wrote results.nc, summary.csv and 3 figures to {out}")
+
+
+@app.command()
+@refuse_bad_input
+def study(
+    study_file: Annotated[
+        Path | None,
+        typer.Argument(help="Study TOML; default: the 2-DOF scenario matrix of §5.4.1."),
+    ] = None,
+    out: OutOption = Path("trackdyn-out"),
+    workers: Annotated[
+        int | None, typer.Option(help="Worker processes (default: one per core; 1: serial).")
+    ] = None,
+    scheduler: Annotated[
+        str | None, typer.Option(help="Address of a running Dask scheduler, tcp://HOST:PORT.")
+    ] = None,
+):
+    """Run a study (scenario matrix, parameter variation or speed sweep) on Dask."""
+    from trackdyn import plots
+    from trackdyn.studies.runner import gather, run_tasks
+    from trackdyn.studies.scenarios import load_study, tasks
+
+    spec, base = load_study(study_file)
+    runs = tasks(spec, base)
+    table, ds = gather(run_tasks(runs, workers=workers, scheduler=scheduler, progress=True))
+    ds.attrs.update(kind=spec.kind, model=spec.run.model)
+    with staged_output(out) as stage:
+        ds.to_netcdf(stage / "study.nc")
+        table.to_csv(stage / "study.csv", index=False, float_format="%.4g")
+        ok = (table["error"] == "").any()
+        if ok and spec.kind == "matrix":
+            plots.study_matrix(table, stage / "study_cases.png")
+        if ok and spec.kind == "sensitivity" and not spec.sensitivity.grid:
+            plots.tornado(table, stage / "tornado.png")
+        if ok and spec.kind == "speed":
+            plots.speed_sweep(table, stage / "speed_sweep.png")
+        if ok:
+            plots.spectra(table, ds, stage / "spectra.png")
+    show = Table(title=f"{spec.kind} study, {spec.run.model}: {len(runs)} runs")
+    columns = [c for c in table.columns if c != "error"]
+    for col in columns:
+        show.add_column(col)
+    for _, row in table.iterrows():
+        show.add_row(*(v if isinstance(v, str) else f"{v:.3g}" for v in row[columns]))
+    console.print(show)
+    for _, row in table[table["error"] != ""].iterrows():
+        labels = ", ".join(f"{c}={row[c]}" for c in columns if c in runs[0].labels)
+        console.print(f"[red]failed[/red] ({labels}): {row['error']}")
+    console.print(f"wrote study.nc, study.csv and figures to {out}")

@@ -162,10 +162,10 @@ def secondary(ds, path) -> None:
 def wedge_friction(ds, path) -> None:
     """Wedge friction force against relative velocity: the stick band and the slip limits."""
     fig, ax = plt.subplots(figsize=(7, 5))
-    for s in ds.suspension.values:
+    for s in ds.wedge.values:
         ax.plot(
-            ds.wedge_velocity.sel(suspension=s) * 1e3,
-            ds.wedge_force.sel(suspension=s) / 1e3,
+            ds.wedge_velocity.sel(wedge=s) * 1e3,
+            ds.wedge_force.sel(wedge=s) / 1e3,
             ".",
             ms=1,
             alpha=0.5,
@@ -175,6 +175,99 @@ def wedge_friction(ds, path) -> None:
     ax.set_ylabel("wedge friction force [kN]")
     ax.set_title("Friction wedges: stick (sloped band) and slip (flat limits)")
     ax.grid(alpha=0.3)
-    if ds.suspension.size:
+    if ds.wedge.size:
         ax.legend(markerscale=8, fontsize=8)
+    _save(fig, path)
+
+
+def study_matrix(table, path) -> None:
+    """Dynamic wheel load SD and max per excitation case, grouped by vehicle and damping."""
+    ok = table[table["error"] == ""]
+    groups = list(ok.groupby(["vehicle", "damping"], sort=False))
+    cases = sorted(ok["case"].unique())
+    fig, axes = plt.subplots(1, 2, figsize=(12, 5))
+    width = 0.8 / max(len(groups), 1)
+    x = np.arange(len(cases))
+    for g, ((vehicle, damping), rows) in enumerate(groups):
+        rows = rows.set_index("case").reindex(cases)
+        for ax, col in zip(axes, ("dyn_load_sd_kN", "dyn_load_max_kN"), strict=True):
+            ax.bar(x + g * width, rows[col], width, label=f"{vehicle}, {damping} damping")
+    for ax, label in zip(
+        axes, ("SD of dynamic wheel load [kN]", "max dynamic wheel load [kN]"), strict=True
+    ):
+        ax.set_xticks(x + width * (len(groups) - 1) / 2, [f"({c})" for c in cases])
+        ax.set_xlabel("excitation case")
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3, axis="y")
+    axes[0].legend(fontsize=8)
+    fig.suptitle(
+        "(i) geometry, rigid track  (ii) geometry, constant stiffness  "
+        "(iii) stiffness, level track  (iv) both",
+        fontsize=9,
+    )
+    _save(fig, path)
+
+
+def tornado(table, path, column: str = "dyn_load_sd_kN") -> None:
+    """Change of ``column`` from the baseline at the lowest and highest factor per parameter."""
+    ok = table[table["error"] == ""]
+    base = float(ok.loc[ok["parameter"] == "baseline", column].iloc[0])
+    rows = []
+    for name, g in ok[ok["parameter"] != "baseline"].groupby("parameter"):
+        lo, hi = g.loc[g["factor"].idxmin()], g.loc[g["factor"].idxmax()]
+        rows.append((name, lo[column] - base, hi[column] - base, lo["factor"], hi["factor"]))
+    rows.sort(key=lambda r: max(abs(r[1]), abs(r[2])))
+    fig, ax = plt.subplots(figsize=(8, 1.2 + 0.6 * len(rows)))
+    y = np.arange(len(rows))
+    ax.barh(
+        y,
+        [r[1] for r in rows],
+        color="tab:blue",
+        label=f"lowest factor (x{rows[0][3]:g})" if rows else None,
+    )
+    ax.barh(
+        y,
+        [r[2] for r in rows],
+        color="tab:red",
+        label=f"highest factor (x{rows[0][4]:g})" if rows else None,
+    )
+    ax.set_yticks(y, [r[0] for r in rows])
+    ax.axvline(0, color="k", lw=0.8)
+    ax.set_xlabel(f"change of {column} from the baseline {base:.2f}")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3, axis="x")
+    _save(fig, path)
+
+
+def spectra(table, ds, path) -> None:
+    """Wheel-load spectrum of each variant."""
+    fig, ax = plt.subplots(figsize=(9, 5))
+    label_cols = [
+        c
+        for c in table.columns
+        if c in ("parameter", "factor", "vehicle", "damping", "case", "speed_kmh")
+        or c.startswith("factor_")
+    ]
+    for run in range(ds.sizes["run"]):
+        if table["error"].iloc[run]:
+            continue
+        label = ", ".join(f"{table[c].iloc[run]}" for c in label_cols)
+        ax.semilogy(ds.frequency, ds.wheel_load_psd.isel(run=run), lw=0.8, label=label)
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel("PSD of the dynamic wheel load [kN²/Hz]")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=6, ncol=3)
+    _save(fig, path)
+
+
+def speed_sweep(table, path) -> None:
+    """Dynamic wheel load against speed."""
+    ok = table[table["error"] == ""].sort_values("speed_kmh")
+    fig, ax = plt.subplots(figsize=(8, 5))
+    ax.plot(ok["speed_kmh"], ok["dyn_load_max_kN"], "o-", label="max")
+    ax.plot(ok["speed_kmh"], ok["dyn_load_sd_kN"], "s-", label="standard deviation")
+    ax.set_xlabel("speed [km/h]")
+    ax.set_ylabel("dynamic wheel load [kN]")
+    ax.grid(alpha=0.3)
+    ax.legend()
     _save(fig, path)

@@ -20,7 +20,7 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
     Variables: ``wheel_load`` (time, contact) [N], mean wheel load of each contact with the
     static load included; ``wheel_input`` [m] and ``track_stiffness`` [N/m], the loaded
     profile (mean over the contact's axles) and the summed stiffness each contact sees;
-    ``secondary_displacement`` (time, suspension) [m]; ``wedge_force`` [N];
+    ``secondary_displacement`` (time, suspension) [m]; ``wedge_force`` (time, wedge) [N];
     ``wedge_velocity`` [m/s]; ``displacement``, ``velocity`` and ``acceleration`` (time,
     dof); ``body_<motion>_acceleration`` [m/s^2 or rad/s^2].
     """
@@ -28,6 +28,7 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
     damping_force = (out["v"] @ model.Dc.T) * model.contact_damping
     wheel_load = model.static_wheel_load + (out["fc"] + damping_force) / n_axles
     dofs = list(model.dof_names)
+    wedge = ("time", "wedge")
     ds = xr.Dataset(
         {
             "wheel_load": (
@@ -58,7 +59,7 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
             ),
             "secondary_displacement": (
                 ("time", "suspension"),
-                out["d"],
+                out["q"] @ model.Ds.T,
                 {
                     "units": "m",
                     "long_name": "displacement across "
@@ -66,12 +67,12 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
                 },
             ),
             "wedge_force": (
-                ("time", "suspension"),
+                wedge,
                 out["fw"],
                 {"units": "N", "long_name": "friction force of the wedge"},
             ),
             "wedge_velocity": (
-                ("time", "suspension"),
+                wedge,
                 out["vw"],
                 {"units": "m/s", "long_name": "relative velocity across the secondary suspension"},
             ),
@@ -97,7 +98,8 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
                 {"units": "m", "long_name": "contact position ahead of the vehicle centre"},
             ),
             "contact_rail": ("contact", list(model.contact_rails)),
-            "suspension": list(model.wedge_names),
+            "suspension": list(model.suspension_names),
+            "wedge": list(model.wedge_names),
             "dof": dofs,
         },
         attrs={

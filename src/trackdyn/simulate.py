@@ -9,6 +9,7 @@ from trackdyn.errors import TrackdynInputError, require_positive
 from trackdyn.results import make_dataset
 from trackdyn.solver.central import (
     STEPS_PER_PERIOD,
+    contact_table_force,
     highest_frequency,
     integrate_chunk,
     step_matrices,
@@ -60,29 +61,50 @@ class _Inputs:
         return k, r, table
 
 
-def _static_state(model, k, r, table, grid):
-    """Static equilibrium at the first position (wedges at rest carry no friction)."""
+def _static_state(model, k, loaded, r, table, grid):
+    """Static equilibrium at the first position (wedges at rest carry no friction).
+
+    On the linearised track it is linear; on the nonlinear track (tabulated contact force
+    against deflection from the unloaded profile ``r``) Newton starts from the linearised
+    state, where every contact is seated.
+    """
     Kc = model.K + model.Dc.T @ (k[:, None] * model.Dc)
-    q = np.linalg.solve(Kc, model.Dc.T @ (k * r))
+    q = np.linalg.solve(Kc, model.Dc.T @ (k * loaded))
     if table.shape[0] == 0:
         return q
     dy = grid[1] - grid[0]
     for _ in range(100):
         defl = model.Dc @ q - r
-        force = np.array([np.interp(d, grid, t) for d, t in zip(defl, table[0], strict=True)])
-        slope = np.array(
-            [
-                np.interp(d, grid[:-1] + dy / 2, np.diff(t) / dy)
-                for d, t in zip(defl, table[0], strict=True)
-            ]
-        )
+        rows = list(zip(defl, table[0], strict=True))
+        force = np.array([contact_table_force(t, grid[0], dy, d) for d, t in rows])
+        seg = np.clip(((defl - grid[0]) // dy).astype(int), 0, grid.size - 2)
+        slope = np.array([t[j + 1] - t[j] for j, (_, t) in zip(seg, rows, strict=True)]) / dy
         residual = model.K @ q + model.Dc.T @ (force - model.static_wheel_load)
-        jac = model.K + model.Dc.T @ (slope[:, None] * model.Dc)
+        jac = model.K + model.Dc.T @ (np.maximum(slope, 1e-6 * k)[:, None] * model.Dc)
         dq = np.linalg.solve(jac, -residual)
         q += dq
         if np.max(np.abs(dq)) < 1e-13:
             return q
     raise TrackdynInputError("no static equilibrium found on the nonlinear track")
+
+
+def time_step(model, lin: LinearisedTrack, speed: float) -> tuple[float, float, float]:
+    """Default time step, stability limit [s] and highest natural frequency [rad/s].
+
+    The frequency is that of the model on the stiffest track along the path; the default
+    step gives `STEPS_PER_PERIOD` steps per its period and moves the vehicle no more than
+    half a geometry sample interval; the explicit scheme is stable below ``2 / ω_max``.
+    """
+    k_max = np.array(
+        [
+            lin.k2[0 if r == "left" else 1].max() * len(a)
+            for r, a in zip(model.contact_rails, model.contact_axles, strict=True)
+        ]
+    )
+    omega = highest_frequency(model.M, model.K + model.Dc.T @ (k_max[:, None] * model.Dc))
+    spacing = float(np.min(np.diff(lin.track.geometry.distance)))
+    dt = min(2 * np.pi / omega / STEPS_PER_PERIOD, 0.5 * spacing / speed)
+    return dt, 2.0 / omega, omega
 
 
 def simulate(
@@ -161,18 +183,8 @@ def simulate(
             f"track {start:.1f}-{end:.1f} m is shorter than the vehicle's path: the axles span "
             f"{front - rear:.2f} m"
         )
-    k_max = np.array(
-        [
-            lin.k2[0 if r == "left" else 1].max() * len(a)
-            for r, a in zip(m.contact_rails, m.contact_axles, strict=True)
-        ]
-    )
-    omega = highest_frequency(m.M, m.K + m.Dc.T @ (k_max[:, None] * m.Dc))
-    limit = 2.0 / omega
-    spacing = float(np.min(np.diff(lin.track.geometry.distance)))
-    if dt is None:
-        dt = min(2 * np.pi / omega / STEPS_PER_PERIOD, 0.5 * spacing / speed)
-    dt = float(require_positive("dt", dt))
+    default_dt, limit, omega = time_step(m, lin, speed)
+    dt = default_dt if dt is None else float(require_positive("dt", dt))
     if dt >= limit:
         raise TrackdynInputError(
             f"time step dt = {dt:.3g} s is beyond the stability limit {limit:.3g} s of the "
@@ -182,7 +194,8 @@ def simulate(
     inputs = _Inputs(m, lin, nonlinear)
     mats = step_matrices(m.M, m.C, m.K, m.Dc, m.Dw, dt)
     k0, r0, t0 = inputs(np.array([c0]))
-    q0 = _static_state(m, k0[0], r0[0], t0, getattr(inputs, "grid", None))
+    _, loaded0, _ = _Inputs(m, lin, nonlinear=False)(np.array([c0]))
+    q0 = _static_state(m, k0[0], loaded0[0], r0[0], t0, getattr(inputs, "grid", None))
     qm1 = q0.copy()
     n_store = (n_steps - 1) // store_every + 1
     n, nc, nw = len(m.dof_names), len(m.contact_names), len(m.wedge_names)
@@ -194,7 +207,6 @@ def simulate(
             ("a", n),
             ("fc", nc),
             ("fw", nw),
-            ("d", nw),
             ("vw", nw),
             ("k", nc),
             ("r", nc),
@@ -214,7 +226,7 @@ def simulate(
             k, r, table, grid[0], grid[1] - grid[0],
             q0, qm1, dt, first, store_every, newton_tol, newton_max_iter,
             out["q"][sl], out["v"][sl], out["a"][sl], out["fc"][sl], out["fw"][sl],
-            out["d"][sl], out["vw"][sl],
+            out["vw"][sl],
         )  # fmt: skip
         if status >= 0:
             t = (first + status) * dt

@@ -79,14 +79,14 @@ def integrate_chunk(
     P1t, P2t, Gct, Gwt, Dc, Dw, H, wedge, static_load,
     k_in, r_in, table, y_start, y_step,
     q0, qm1, dt, step0, store_every, tol, max_iter,
-    out_q, out_v, out_a, out_fc, out_fw, out_d, out_vw,
+    out_q, out_v, out_a, out_fc, out_fw, out_vw,
 ):  # fmt: skip
     """Advance ``k_in.shape[0]`` steps from ``(q-1, q0)``; update them in place.
 
     Contacts are linear, ``f = k (Dc q - r)``, when ``table`` has no rows, and tabulated
     (``f = P(Dc q - r) - Ps``) otherwise. Every ``store_every``-th global step is written
     to the ``out_*`` arrays (displacement, velocity, acceleration, contact force beyond
-    static without damping, wedge force, wedge displacement, wedge velocity).
+    static without damping, wedge force, wedge velocity).
 
     Returns -1 on success, or the chunk-local index of the step whose Newton iteration
     did not converge.
@@ -105,7 +105,6 @@ def integrate_chunk(
     f_down = np.empty(nw)
     F = np.zeros(nw)
     dF = np.empty(nw)
-    d = np.empty(nw)
     jac = np.empty((nw, nw))
     res = np.empty(nw)
     stored = 0
@@ -138,7 +137,6 @@ def integrate_chunk(
                 for i in range(n):
                     dd += Dw[w, i] * q0[i]
                     vv += Dw[w, i] * (q1[i] - qm1[i])
-                d[w] = dd
                 vfree[w] = vv * inv2dt
                 v[w] = vfree[w]
                 normal = (wedge[w, 1] + dd) * wedge[w, 0]
@@ -184,7 +182,6 @@ def integrate_chunk(
                 out_fc[stored, c] = fc[c]
             for w in range(nw):
                 out_fw[stored, w] = F[w]
-                out_d[stored, w] = d[w]
                 out_vw[stored, w] = v[w]
             stored += 1
         for i in range(n):

@@ -57,11 +57,16 @@ class Point:
 
 @dataclass(frozen=True)
 class Spring:
-    """Linear spring of stiffness ``k`` [N/m] between points ``p`` and ``q``."""
+    """Linear spring of stiffness ``k`` [N/m] between points ``p`` and ``q``.
+
+    ``suspension`` names a secondary suspension (e.g. ``"FL"``) whose displacement is
+    reported; empty for other springs.
+    """
 
     p: Point
     q: Point
     k: float
+    suspension: str = ""
 
 
 @dataclass(frozen=True)
@@ -200,12 +205,15 @@ class Assembly:
     def build(self, name: str, static_wheel_load: float) -> Model:
         """Freeze the assembly into the plain arrays the solver integrates."""
         w = self.wedges
+        sec = [s for s in self.springs if s.suspension]
         return Model(
             name=name,
             dof_names=tuple(f"{body.name}_{m}" for body, m in self.dofs),
             M=self.mass_matrix(),
             K=self.stiffness_matrix(),
             C=self.damping_matrix(),
+            suspension_names=tuple(s.suspension for s in sec),
+            Ds=np.array([self.relative(s.p, s.q) for s in sec]).reshape(len(sec), len(self.dofs)),
             wedge_names=tuple(x.name for x in w),
             Dw=np.array([self.relative(x.p, x.q) for x in w]).reshape(len(w), len(self.dofs)),
             wedge_params=np.array(
@@ -233,6 +241,9 @@ class Model:
         Generalised coordinates, ``<body>_<motion>``.
     M, K, C : ndarray
         Mass [kg, kg m^2], spring stiffness [N/m] and damping [N s/m] matrices.
+    suspension_names : tuple of str
+    Ds : ndarray
+        Rows mapping q to the displacement across each secondary suspension.
     wedge_names : tuple of str
     Dw : ndarray
         Rows mapping q to the displacement across each wedge's suspension.
@@ -255,6 +266,8 @@ class Model:
     M: np.ndarray
     K: np.ndarray
     C: np.ndarray
+    suspension_names: tuple[str, ...]
+    Ds: np.ndarray
     wedge_names: tuple[str, ...]
     Dw: np.ndarray
     wedge_params: np.ndarray

@@ -31,7 +31,7 @@ def two_dof(v: Vehicle, wedge: bool = False) -> Model:
     asm = Assembly()
     body = asm.add(Body("body", v.m1 / 8))
     wheel = asm.add(Body("wheel", (v.mw + v.m2) / 4))
-    asm.add(Spring(body.at(), wheel.at(), v.k1 / 2))
+    asm.add(Spring(body.at(), wheel.at(), v.k1 / 2, "secondary"))
     if wedge:
         asm.add(_wedge(v, "secondary", body.at(), wheel.at(), scale=0.5))
     else:
@@ -54,7 +54,7 @@ def four_dof(v: Vehicle) -> Model:
         Body("wheelset", v.mw + v.m2, roll_inertia=v.Iw + v.I2, motions=("bounce", "roll"))
     )
     for side, sign, _ in SIDES:
-        asm.add(Spring(body.at(sign * v.b), ws.at(sign * v.b), v.k1))
+        asm.add(Spring(body.at(sign * v.b), ws.at(sign * v.b), v.k1, side))
         asm.add(_wedge(v, side, body.at(sign * v.b), ws.at(sign * v.b)))
     _bogie_side_contacts(asm, v, ws, "", v.b_cc)
     return asm.build("4dof", v.static_wheel_load)
@@ -72,8 +72,9 @@ def seven_dof(v: Vehicle) -> Model:
         )
         for side, sign, _ in SIDES:
             p = body.at(sign * v.b, x)
-            asm.add(Spring(p, ws.at(sign * v.b), v.k1))
-            asm.add(_wedge(v, end[0].upper() + side, p, ws.at(sign * v.b)))
+            name = end[0].upper() + side
+            asm.add(Spring(p, ws.at(sign * v.b), v.k1, name))
+            asm.add(_wedge(v, name, p, ws.at(sign * v.b)))
         _bogie_side_contacts(asm, v, ws, end[0].upper(), x)
     return asm.build("7dof", v.static_wheel_load)
 
@@ -87,8 +88,9 @@ def eleven_dof(v: Vehicle) -> Model:
         ws = asm.add(Body(f"{end}_wheelset", v.mw, roll_inertia=v.Iw, motions=("bounce", "roll")))
         for side, sign, _ in SIDES:
             p = body.at(sign * v.b, x)
-            asm.add(Spring(p, frame.at(sign * v.b), v.k1))
-            asm.add(_wedge(v, end[0].upper() + side, p, frame.at(sign * v.b)))
+            name = end[0].upper() + side
+            asm.add(Spring(p, frame.at(sign * v.b), v.k1, name))
+            asm.add(_wedge(v, name, p, frame.at(sign * v.b)))
             asm.add(Spring(frame.at(sign * v.b), ws.at(sign * v.b), v.kp))
             asm.add(Damper(frame.at(sign * v.b), ws.at(sign * v.b), v.rho_p))
         _bogie_side_contacts(asm, v, ws, end[0].upper(), x)

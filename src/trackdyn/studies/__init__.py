@@ -1,0 +1,1 @@
+"""Studies: many independent simulations run through Dask, gathered into one table."""
