@@ -137,12 +137,15 @@ def run_tasks(
     scheduler: str | None = None,
     progress: bool = False,
 ) -> list[dict]:
-    """Run every task; results in the order of ``tasks``.
+    """Run ``func`` on every task; results in the order of ``tasks``.
 
     Parameters
     ----------
-    tasks : list of Task
-        Independent runs.
+    tasks : list
+        Independent runs (`Task` for `run_task`); small picklable objects.
+    func : callable
+        Module-level function run on each task; it should report failures in its result
+        rather than raise.
     workers : int, optional
         Worker processes of the local cluster (default: one per core); 1 runs the tasks
         serially in this process.
@@ -157,7 +160,7 @@ def run_tasks(
     if workers == 1 and not scheduler:
         results = []
         for t in tasks:
-            results.append(run_task(t))
+            results.append(func(t))
             bar.advance()
         bar.close()
         return results
@@ -165,7 +168,7 @@ def run_tasks(
 
     client, cluster = _client(workers, scheduler)
     try:
-        futures = client.map(run_task, tasks, pure=False)
+        futures = client.map(func, tasks, pure=False)
         for _ in as_completed(futures):
             bar.advance()
         return client.gather(futures)
