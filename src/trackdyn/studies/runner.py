@@ -131,8 +131,9 @@ def _client(workers: int | None, scheduler: str | None):
 
 
 def run_tasks(
-    tasks: list[Task],
+    tasks: list,
     *,
+    func=run_task,
     workers: int | None = None,
     scheduler: str | None = None,
     progress: bool = False,
