@@ -55,8 +55,7 @@ class _Inputs:
                 r[:, c] += loaded / len(axles)
             if self.nonlinear:
                 x = centre + axles[0]
-                g = self.lin.track.geometry
-                r[:, c] = np.interp(x, g.distance, g.profile(rail))
+                r[:, c] = self.lin.track.geometry.at(rail, x)
                 table[:, c] = self.surface[rail](x)
         return k, r, table
 

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.interpolate import CubicSpline
 
 from trackdyn.errors import TrackdynInputError, check_series
 from trackdyn.track.support import SupportCurve, secant_linearisation
@@ -44,6 +46,19 @@ class Geometry:
         if rail not in RAILS:
             raise TrackdynInputError(f"unknown rail {rail!r}; use left or right")
         return getattr(self, rail)
+
+    @functools.cached_property
+    def _splines(self) -> dict:
+        return {r: CubicSpline(self.distance, getattr(self, r)) for r in RAILS}
+
+    def at(self, rail: str, x) -> np.ndarray:
+        """Profile of ``rail`` at positions ``x`` [m], by cubic spline between samples [m].
+
+        A smooth space curve: its slope and curvature are continuous, so a wheel that
+        follows it (as on rigid track) is not kicked at every measured point.
+        """
+        self.profile(rail)
+        return self._splines[rail](np.asarray(x, dtype=float))
 
 
 @dataclass(frozen=True)
@@ -166,8 +181,9 @@ class LinearisedTrack:
     def sample(self, rail: str, x) -> tuple[np.ndarray, np.ndarray]:
         """Stiffness [N/m] and loaded profile [m] of ``rail`` at positions ``x`` [m].
 
-        Stiffness and static deflection are interpolated linearly between sleepers; the
-        loaded profile is the unloaded space curve plus the static deflection (Fig. 5.4).
+        Stiffness and static deflection are interpolated linearly between sleepers, the
+        unloaded space curve by cubic spline (`Geometry.at`); the loaded profile is the
+        unloaded space curve plus the static deflection (Fig. 5.4).
         """
         x = np.asarray(x, dtype=float)
         self._check_inside(x)
@@ -175,7 +191,7 @@ class LinearisedTrack:
         pos = self.track.supports.position
         g = self.track.geometry
         k = np.interp(x, pos, self.k2[r])
-        loaded = np.interp(x, g.distance, g.profile(rail)) + np.interp(x, pos, self.ys[r])
+        loaded = g.at(rail, x) + np.interp(x, pos, self.ys[r])
         return k, loaded
 
     def loaded_profile(self, rail: str) -> np.ndarray:
