@@ -119,7 +119,6 @@ def simulate(
     start: float | None = None,
     end: float | None = None,
     progress: bool = False,
-    newton_tol: float = 1e-10,
     newton_max_iter: int = 50,
 ) -> xr.Dataset:
     """Run a vehicle model over a track at constant speed.
@@ -153,8 +152,6 @@ def simulate(
         Part of the track to run over [m]; default the whole track.
     progress : bool
         Show a progress bar.
-    newton_tol : float
-        Relative tolerance on the wedge velocities of the Newton iteration [-].
     newton_max_iter : int
         Newton iterations allowed per step.
 
@@ -191,11 +188,11 @@ def simulate(
         )
     n_steps = int(np.floor((c1 - c0) / (speed * dt))) + 1
     inputs = _Inputs(m, lin, nonlinear)
-    mats = step_matrices(m.M, m.C, m.K, m.Dc, m.Dw, dt)
+    mats = step_matrices(m, dt)
     k0, r0, t0 = inputs(np.array([c0]))
     _, loaded0, _ = _Inputs(m, lin, nonlinear=False)(np.array([c0]))
     q0 = _static_state(m, k0[0], loaded0[0], r0[0], t0, getattr(inputs, "grid", None))
-    qm1 = q0.copy()
+    z = np.r_[q0, q0]  # start at rest: q-1 = q0
     n_store = (n_steps - 1) // store_every + 1
     n, nc, nw = len(m.dof_names), len(m.contact_names), len(m.wedge_names)
     out = {
@@ -221,9 +218,9 @@ def simulate(
         keep = steps % store_every == 0
         sl = slice(stored, stored + int(keep.sum()))
         status = integrate_chunk(
-            *mats[:4], m.Dc, m.Dw, mats[4], m.wedge_params, m.static_wheel_load,
+            *mats, m.static_wheel_load,
             k, r, table, grid[0], grid[1] - grid[0],
-            q0, qm1, dt, first, store_every, newton_tol, newton_max_iter,
+            z, dt, first, store_every, newton_max_iter,
             out["q"][sl], out["v"][sl], out["a"][sl], out["fc"][sl], out["fw"][sl],
             out["vw"][sl],
         )  # fmt: skip

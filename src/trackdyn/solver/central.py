@@ -11,8 +11,12 @@ formed once; each step then solves only the small nonlinear system of the wedges
 
     v + H F(v) = v_free,    H = Dw A^-1 Dw^T / (2Δt),
 
-by Newton-Raphson. ``F`` is piecewise linear and monotone in ``v`` (eqs 5.30-5.33), so
-Newton ends in a few iterations once the stick/slip state of every wedge is right.
+by Newton-Raphson. ``F`` is piecewise linear and monotone in ``v`` (eqs 5.30-5.33): each
+wedge sticks (``F = C_slope v``) or slips (``F = ±`` the slip force), and Newton from a
+point solves the linear system of the stick/slip states there. The solution is exact as
+soon as the states it lands in are the ones it assumed, so the iteration stops then; it
+starts from the previous step's states and usually needs one solve. The matrices
+``(I + H diag(C_slope·stick))^-1`` of all ``2^nw`` state combinations are formed once.
 """
 
 from __future__ import annotations
@@ -22,46 +26,6 @@ from numba import njit
 
 
 @njit(cache=True, inline="always")
-def wedge_law(v, f_up, f_down, c_slope):
-    """Friction force [N] and its slope dF/dv [N s/m] at relative velocity ``v`` [m/s].
-
-    ``f_up``/``f_down`` are the slip forces in compression/extension (5.30); near zero
-    velocity the force follows ``C_slope v`` while that is smaller in magnitude.
-    """
-    f = c_slope * v
-    if f > f_up:
-        return f_up, 0.0
-    if f < -f_down:
-        return -f_down, 0.0
-    return f, c_slope
-
-
-@njit(cache=True, inline="always", error_model="numpy")
-def _solve_small(a, b, n):
-    """Solve ``a x = b`` in place (Gaussian elimination, partial pivoting); returns ``b``."""
-    for k in range(n):
-        p = k
-        for i in range(k + 1, n):
-            if abs(a[i, k]) > abs(a[p, k]):
-                p = i
-        if p != k:
-            for j in range(n):
-                a[k, j], a[p, j] = a[p, j], a[k, j]
-            b[k], b[p] = b[p], b[k]
-        for i in range(k + 1, n):
-            m = a[i, k] / a[k, k]
-            for j in range(k, n):
-                a[i, j] -= m * a[k, j]
-            b[i] -= m * b[k]
-    for k in range(n - 1, -1, -1):
-        s = b[k]
-        for j in range(k + 1, n):
-            s -= a[k, j] * b[j]
-        b[k] = s / a[k, k]
-    return b
-
-
-@njit(cache=True)
 def contact_table_force(table, y_start, y_step, deflection):
     """Tabulated track force [N] at ``deflection`` [m]: zero before the table, linear after."""
     if deflection <= y_start:
@@ -76,12 +40,13 @@ def contact_table_force(table, y_start, y_step, deflection):
 
 @njit(cache=True, fastmath=True, error_model="numpy")
 def integrate_chunk(
-    P1t, P2t, Gct, Gwt, Dc, Dw, H, wedge, static_load,
+    p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dc_idx, dc_val, dw_idx, dw_val,
+    wv_idx, wv_val, wv_c, H, jinv, wedge, static_load,
     k_in, r_in, table, y_start, y_step,
-    q0, qm1, dt, step0, store_every, tol, max_iter,
+    z, dt, step0, store_every, max_iter,
     out_q, out_v, out_a, out_fc, out_fw, out_vw,
 ):  # fmt: skip
-    """Advance ``k_in.shape[0]`` steps from ``(q-1, q0)``; update them in place.
+    """Advance ``k_in.shape[0]`` steps from ``z = [q0, q-1]``, updated in place.
 
     Contacts are linear, ``f = k (Dc q - r)``, when ``table`` has no rows, and tabulated
     (``f = P(Dc q - r) - Ps``) otherwise. Every ``store_every``-th global step is written
@@ -91,93 +56,103 @@ def integrate_chunk(
     Returns -1 on success, or the chunk-local index of the step whose Newton iteration
     did not converge.
     """
-    n = q0.size
-    nc = Dc.shape[0]
-    nw = Dw.shape[0]
+    n = p_idx.shape[0]
+    nc = dc_idx.shape[0]
+    nw = dw_idx.shape[0]
     inv2dt = 0.5 / dt
     invdt2 = 1.0 / (dt * dt)
     nonlinear = table.shape[0] > 0
     q1 = np.empty(n)
     fc = np.empty(nc)
     vfree = np.empty(nw)
-    v = np.empty(nw)
+    rhs = np.empty(nw)
+    v = np.zeros(nw)
     f_up = np.empty(nw)
     f_down = np.empty(nw)
     F = np.zeros(nw)
-    dF = np.empty(nw)
-    jac = np.empty((nw, nw))
-    res = np.empty(nw)
+    state = np.zeros(nw, np.int64)  # 0 stick, 1 slip in compression, 2 slip in extension
     stored = 0
     for s in range(k_in.shape[0]):
         for c in range(nc):
             x = 0.0
-            for i in range(n):
-                x += Dc[c, i] * q0[i]
+            for j in range(dc_idx.shape[1]):
+                x += dc_val[c, j] * z[dc_idx[c, j]]
             if nonlinear:
                 fc[c] = contact_table_force(table[s, c], y_start, y_step, x - r_in[s, c])
                 fc[c] -= static_load
             else:
                 fc[c] = k_in[s, c] * (x - r_in[s, c])
-        # column sweeps over the transposed matrices: independent updates, no long chains
-        for i in range(n):
-            q1[i] = 0.0
-        for j in range(n):
-            a = q0[j]
-            b = qm1[j]
-            for i in range(n):
-                q1[i] += P1t[j, i] * a - P2t[j, i] * b
-        for c in range(nc):
-            f = fc[c]
-            for i in range(n):
-                q1[i] -= Gct[c, i] * f
         if nw > 0:
+            # wedge velocities if no friction acted: v = Dw (q1 - q-1) / 2Δt, taken straight
+            # from z and fc (precomputed rows) so the Newton solve need not wait for q1
             for w in range(nw):
                 dd = 0.0
+                for j in range(dw_idx.shape[1]):
+                    dd += dw_val[w, j] * z[dw_idx[w, j]]
                 vv = 0.0
-                for i in range(n):
-                    dd += Dw[w, i] * q0[i]
-                    vv += Dw[w, i] * (q1[i] - qm1[i])
+                for j in range(wv_idx.shape[1]):
+                    vv += wv_val[w, j] * z[wv_idx[w, j]]
+                for c in range(nc):
+                    vv -= wv_c[w, c] * fc[c]
                 vfree[w] = vv * inv2dt
-                v[w] = vfree[w]
-                normal = (wedge[w, 1] + dd) * wedge[w, 0]
+                normal = wedge[w, 0] + dd
                 if normal < 0.0:
                     normal = 0.0
-                f_up[w] = normal * wedge[w, 2] / (wedge[w, 3] - wedge[w, 2])
-                f_down[w] = normal * wedge[w, 2] / (wedge[w, 3] + wedge[w, 2])
+                f_up[w] = normal * wedge[w, 1]
+                f_down[w] = normal * wedge[w, 2]
             converged = False
             for _ in range(max_iter):
+                mask = 0
                 for w in range(nw):
-                    F[w], dF[w] = wedge_law(v[w], f_up[w], f_down[w], wedge[w, 4])
-                size = 0.0
+                    if state[w] == 0:
+                        F[w] = 0.0
+                        mask |= 1 << w
+                    elif state[w] == 1:
+                        F[w] = f_up[w]
+                    else:
+                        F[w] = -f_down[w]
                 for w in range(nw):
-                    r = v[w] - vfree[w]
+                    r = vfree[w]
                     for u in range(nw):
-                        r += H[w, u] * F[u]
-                        jac[w, u] = H[w, u] * dF[u]
-                    jac[w, w] += 1.0
-                    res[w] = -r
-                    size = max(size, abs(v[w]))
-                _solve_small(jac, res, nw)
-                step = 0.0
+                        r -= H[w, u] * F[u]
+                    rhs[w] = r
+                same = True
                 for w in range(nw):
-                    v[w] += res[w]
-                    step = max(step, abs(res[w]))
-                if step <= tol * (1.0 + size):
+                    vv = 0.0
+                    for u in range(nw):
+                        vv += jinv[mask, w, u] * rhs[u]
+                    v[w] = vv
+                    f = wedge[w, 3] * vv
+                    new = 1 if f > f_up[w] else (2 if f < -f_down[w] else 0)
+                    if new != state[w]:
+                        same = False
+                        state[w] = new
+                if same:
                     converged = True
                     break
             if not converged:
                 return s
             for w in range(nw):
-                F[w], dF[w] = wedge_law(v[w], f_up[w], f_down[w], wedge[w, 4])
-            for w in range(nw):
-                f = F[w]
-                for i in range(n):
-                    q1[i] -= Gwt[w, i] * f
+                if state[w] == 0:
+                    F[w] = wedge[w, 3] * v[w]
+        for i in range(n):
+            acc = 0.0
+            for j in range(p_idx.shape[1]):
+                acc += p_val[i, j] * z[p_idx[i, j]]
+            q1[i] = acc
+        for c in range(nc):
+            f = fc[c]
+            for j in range(gc_idx.shape[1]):
+                q1[gc_idx[c, j]] -= gc_val[c, j] * f
+        for w in range(nw):
+            f = F[w]
+            for j in range(gw_idx.shape[1]):
+                q1[gw_idx[w, j]] -= gw_val[w, j] * f
         if (step0 + s) % store_every == 0:
             for i in range(n):
-                out_q[stored, i] = q0[i]
-                out_v[stored, i] = (q1[i] - qm1[i]) * inv2dt
-                out_a[stored, i] = (q1[i] - 2.0 * q0[i] + qm1[i]) * invdt2
+                out_q[stored, i] = z[i]
+                out_v[stored, i] = (q1[i] - z[n + i]) * inv2dt
+                out_a[stored, i] = (q1[i] - 2.0 * z[i] + z[n + i]) * invdt2
             for c in range(nc):
                 out_fc[stored, c] = fc[c]
             for w in range(nw):
@@ -185,22 +160,56 @@ def integrate_chunk(
                 out_vw[stored, w] = v[w]
             stored += 1
         for i in range(n):
-            qm1[i] = q0[i]
-            q0[i] = q1[i]
+            z[n + i] = z[i]
+            z[i] = q1[i]
     return -1
 
 
-def step_matrices(M, C, K, Dc, Dw, dt):
-    """Constant matrices of the scheme, transposed for the loop: ``P1^T, P2^T, Gc^T, Gw^T``
-    and ``H`` (see the module docstring)."""
+def _sparse_rows(D):
+    """Column indices and values of the nonzeros of each row of ``D``, zero-padded.
+
+    The models' matrices are mostly zeros (``A`` is block diagonal: no damper crosses the
+    secondary suspension), so the loop runs over nonzeros only.
+    """
+    width = max(1, int((D != 0).sum(axis=1).max())) if D.size else 1
+    idx = np.zeros((D.shape[0], width), np.int64)
+    val = np.zeros((D.shape[0], width))
+    for r, row in enumerate(D):
+        nz = np.flatnonzero(row)
+        idx[r, : nz.size], val[r, : nz.size] = nz, row[nz]
+    return idx, val
+
+
+def step_matrices(model, dt):
+    """Constant arrays of the scheme for `integrate_chunk`, from a `Model` and the step [s].
+
+    The sparse rows (`_sparse_rows`) of ``P = [A^-1 (2M/Δt² - K), -A^-1 (M/Δt² - C/(2Δt))]``
+    acting on ``[q0, q-1]``, of ``Gc^T`` and ``Gw^T`` with ``Gc = A^-1 Dc^T`` and
+    ``Gw = A^-1 Dw^T``, of ``Dc``, ``Dw`` and ``Dw P - [0, Dw]`` (the wedge velocity
+    before friction, times 2Δt), and ``Dw Gc`` dense; ``H``; the inverses of
+    ``I + H diag(C_slope·stick)`` for every stick/slip combination; and per wedge
+    ``x_ss [m]``, the slip force per unit spring
+    compression in compression and in extension ``k_ss μ / (tan α_w ∓ μ)`` [N/m], and
+    ``C_slope`` [N s/m].
+    """
+    M, C, K, Dc, Dw = model.M, model.C, model.K, model.Dc, model.Dw
     A = M / dt**2 + C / (2 * dt)
     Ainv = np.linalg.inv(A)
-    P1 = Ainv @ (2 * M / dt**2 - K)
-    P2 = Ainv @ (M / dt**2 - C / (2 * dt))
-    Gc = Ainv @ Dc.T
+    P = np.hstack([Ainv @ (2 * M / dt**2 - K), -Ainv @ (M / dt**2 - C / (2 * dt))])
     Gw = Ainv @ Dw.T
     H = Dw @ Gw / (2 * dt)
-    return (*(np.ascontiguousarray(x.T) for x in (P1, P2, Gc, Gw)), H)
+    k_ss, x_ss, mu, tan_a, c_slope = model.wedge_params.T
+    wedge = np.column_stack([x_ss, k_ss * mu / (tan_a - mu), k_ss * mu / (tan_a + mu), c_slope])
+    nw = Dw.shape[0]
+    jinv = np.empty((2**nw, nw, nw))
+    for mask in range(2**nw):
+        stick = np.array([(mask >> w) & 1 for w in range(nw)], dtype=float)
+        jinv[mask] = np.linalg.inv(np.eye(nw) + H * (c_slope * stick)[None, :])
+    Gc = Ainv @ Dc.T
+    wv = Dw @ P - np.hstack([np.zeros_like(Dw), Dw])  # Dw (q1 - q-1) without forces
+    sparse = [_sparse_rows(x) for x in (P, Gc.T, Gw.T, Dc, Dw, wv)]
+    wedge = np.ascontiguousarray(wedge.reshape(nw, 4))
+    return (*(a for pair in sparse for a in pair), np.ascontiguousarray(Dw @ Gc), H, jinv, wedge)
 
 
 def highest_frequency(M, K) -> float:
