@@ -207,3 +207,13 @@ def staged_output(out):
             os.replace(item, out / item.name)
     finally:
         shutil.rmtree(stage, ignore_errors=True)
+
+
+def write_netcdf(ds, path) -> None:
+    """Write a Dataset to netCDF-4 with zlib compression of every numeric variable."""
+    encoding = {
+        name: {"zlib": True, "complevel": 4}
+        for name, var in ds.variables.items()
+        if var.dtype.kind in "fiu"
+    }
+    ds.to_netcdf(path, encoding=encoding)

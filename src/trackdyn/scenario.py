@@ -13,7 +13,7 @@ supports = "supports.csv"  # distance_m,rail,load_kN,deflection_mm
 model = "11dof"
 speed_kmh = 60
 dt_s = 2e-4                # optional; default chosen for accuracy
-store_every = 1
+# store_every = 10         # keep every n-th step; default: one per millisecond
 delta = 0.3
 ```
 """
@@ -62,7 +62,7 @@ class RunSpec(Strict):
     model: Literal["2dof", "2dof-wedge", "4dof", "7dof", "11dof"] = "11dof"
     speed_kmh: PositiveFloat = 60.0
     dt_s: PositiveFloat | None = None
-    store_every: PositiveInt = 1
+    store_every: PositiveInt | None = None
     delta: float = Field(0.3, gt=0, lt=1)
     nonlinear: bool = False
 

@@ -21,8 +21,6 @@ from scipy import signal
 
 from trackdyn.errors import TrackdynInputError
 
-OUTPUT_STEP = 1e-3
-"""Output interval of study runs without an explicit ``store_every`` [s]."""
 SPECTRUM_FREQUENCY = np.arange(0.0, 40.0 + 1e-9, 0.125)
 """Common frequency grid of the runs' wheel-load spectra [Hz]."""
 
@@ -76,17 +74,22 @@ def run_task(task: Task) -> dict:
     Never raises: a failure comes back as ``{"labels", "error"}``.
     """
     from trackdyn.results import summary
-    from trackdyn.simulate import simulate, time_step
-    from trackdyn.vehicle.models import build_model
+    from trackdyn.simulate import simulate
     from trackdyn.vehicle.parameters import load_vehicle
 
     try:
         vehicle = load_vehicle(task.vehicle, **task.overrides)
         lin = _linearised(task.track, vehicle.static_wheel_load, task.delta)
         speed = task.speed_kmh / 3.6
-        dt = task.dt_s or time_step(build_model(task.model, vehicle), lin, speed)[0]
-        every = task.store_every or max(1, round(OUTPUT_STEP / dt))
-        ds = simulate(vehicle, lin, speed, task.model, dt=dt, store_every=every, delta=task.delta)
+        ds = simulate(
+            vehicle,
+            lin,
+            speed,
+            task.model,
+            dt=task.dt_s,
+            store_every=task.store_every,
+            delta=task.delta,
+        )
     except TrackdynInputError as exc:
         return {"labels": task.labels, "error": str(exc)}
     except Exception as exc:  # noqa: BLE001 - reported with the run's labels, others go on
