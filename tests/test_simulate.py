@@ -1,0 +1,71 @@
+"""simulate(): output decimation, error reporting, the nonlinear track's static state."""
+
+import numpy as np
+import pytest
+
+from trackdyn.errors import TrackdynInputError
+from trackdyn.simulate import OUTPUT_STEP, simulate
+from trackdyn.track.support import SupportCurve
+from trackdyn.track.synthetic import synthetic_track
+from trackdyn.track.track import Geometry, Supports, Track
+from trackdyn.vehicle.parameters import load_vehicle
+
+V = load_vehicle("loaded")
+
+
+@pytest.fixture(scope="module")
+def lin():
+    return synthetic_track(80.0, spectrum="fra4", seed=4).linearise(V.static_wheel_load)
+
+
+def test_store_every_keeps_the_same_steps(lin):
+    full = simulate(V, lin, 20.0, "11dof")
+    every = simulate(V, lin, 20.0, "11dof", store_every=7)
+    # the stored steps are the same steps of the same computation
+    np.testing.assert_array_equal(every.wheel_load, full.wheel_load[::7])
+    auto = simulate(V, lin, 20.0, "11dof", store_every=None)
+    step = float(auto.time[1] - auto.time[0])
+    assert step == pytest.approx(OUTPUT_STEP, rel=0.5)
+
+
+def test_newton_failure_names_time_and_position(lin):
+    # one Newton pass allowed: the first change of any wedge between stick and slip fails
+    with pytest.raises(
+        TrackdynInputError,
+        match=r"did not converge at t = .* s, vehicle "
+        r"centre at .* m",
+    ):
+        simulate(V, lin, 20.0, "11dof", newton_max_iter=1)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"speed": 0.0}, "speed must be finite and > 0"),
+        ({"speed": -5.0}, "speed must be finite and > 0"),
+        ({"speed": 20.0, "dt": 0.05}, "beyond the stability limit"),
+        ({"speed": 20.0, "store_every": 0}, "store_every must be a whole number"),
+        ({"speed": 20.0, "model": "3dof"}, "unknown model '3dof'"),
+        ({"speed": 20.0, "start": 70.0}, "shorter than the vehicle's path"),
+    ],
+)
+def test_bad_arguments(lin, kwargs, match):
+    with pytest.raises(TrackdynInputError, match=match):
+        simulate(V, lin, **kwargs)
+
+
+def test_nonlinear_track_with_a_pure_seating_gap():
+    # Zero load up to 1 mm, then 100 kN/mm: the static state sits 1 mm + Ps/k down and a
+    # uniform level track gives no dynamic load (seed §5.4.1).
+    x = np.arange(0, 30.01, 0.25)
+    sleepers = np.arange(0.3, 30, 0.6)
+    loads = np.linspace(0, 300e3, 13)
+    curve = SupportCurve(loads, 1e-3 + loads / 100e6)
+    trk = Track(
+        Geometry(x, 0 * x, 0 * x),
+        Supports(sleepers, (curve,) * sleepers.size, (curve,) * sleepers.size),
+    )
+    ds = simulate(V, trk, 20.0, "2dof", nonlinear=True)
+    assert float(np.abs(ds.wheel_load - V.static_wheel_load).max()) < 1e-6 * V.static_wheel_load
+    wheel = float(ds.displacement.sel(dof="wheel_bounce")[0])
+    assert wheel == pytest.approx(1e-3 + V.static_wheel_load / 100e6, rel=1e-3)

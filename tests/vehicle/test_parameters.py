@@ -1,0 +1,62 @@
+"""Vehicle parameter files: units converted, sources kept, bad names and values refused."""
+
+import math
+
+import pytest
+
+from trackdyn.errors import TrackdynInputError
+from trackdyn.vehicle.parameters import PARAMETERS, load_vehicle
+
+
+def test_loaded_preset_in_si_units():
+    v = load_vehicle("loaded")
+    assert v.k1 == pytest.approx(4.0e6)  # "4.0 MN/m" in the file
+    assert v.x_ss == pytest.approx(0.045)  # "45 mm"
+    assert v.alpha_w == pytest.approx(math.radians(36.3))  # "36.3 deg"
+    # 26 t axle load: static wheel load = 13 t x g (loaded preset totals 104 t)
+    assert v.static_wheel_load == pytest.approx(13000 * 9.81, rel=1e-4)
+    assert set(v.sources) == set(PARAMETERS)
+    assert "data.md" in v.sources["mw"]
+
+
+def test_base_file_and_overrides(tmp_path):
+    f = tmp_path / "wagon.toml"
+    f.write_text('base = "empty"\n[mu]\nvalue = 0.3\nunit = "-"\nsource = "test bench"\n')
+    v = load_vehicle(f, k1=5e6)
+    assert v.mu == 0.3 and v.k1 == 5e6 and v.m1 == load_vehicle("empty").m1
+    assert v.sources["mu"] == "test bench" and v.sources["k1"] == "override"
+    assert load_vehicle("loaded-high-damping").rho1 == pytest.approx(120e3)
+
+
+def test_replace_refuses_unknown_name():
+    with pytest.raises(TrackdynInputError, match="unknown vehicle parameter 'kappa'"):
+        load_vehicle("loaded").replace(kappa=1.0)
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        ('base = "loaded"\n[k1]\nvalue = 4\nunit = "kN"\nsource = "x"\n', "unit 'kN' of k1"),
+        ('base = "loaded"\n[k1]\nvalue = 4\nunit = "MN/m"\n', "needs value, unit and source"),
+        (
+            'base = "loaded"\n[kk1]\nvalue = 4\nunit = "MN/m"\nsource = "x"\n',
+            "unknown vehicle parameter 'kk1'",
+        ),
+        ('base = "loaded"\n[k1]\nvalue = "four"\nunit = "MN/m"\nsource = "x"\n', "not a number"),
+        ('base = "loaded"\n[k1]\nvalue = -4\nunit = "MN/m"\nsource = "x"\n', "k1 must be > 0"),
+        ('base = "loaded"\n[mu]\nvalue = 0.8\nunit = "-"\nsource = "x"\n', "locks the wedge"),
+        ('[k1]\nvalue = 4\nunit = "MN/m"\nsource = "x"\n', "missing vehicle parameter"),
+        ("k1 = [", "not valid TOML"),
+    ],
+)
+def test_bad_files(tmp_path, text, match):
+    f = tmp_path / "bad.toml"
+    f.write_text(text)
+    with pytest.raises(TrackdynInputError, match=match) as err:
+        load_vehicle(f)
+    assert "bad.toml" in str(err.value)
+
+
+def test_unknown_preset():
+    with pytest.raises(TrackdynInputError, match="unknown vehicle preset 'tank'; known:"):
+        load_vehicle("tank")
