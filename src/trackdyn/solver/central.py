@@ -72,6 +72,7 @@ def integrate_chunk(
     F = np.zeros(nw)
     state = np.zeros(nw, np.int64)  # 0 stick, 1 slip in compression, 2 slip in extension
     stored = 0
+    to_store = -step0 % store_every  # steps until the next stored one (no modulo per step)
     for s in range(k_in.shape[0]):
         for c in range(nc):
             x = 0.0
@@ -148,7 +149,8 @@ def integrate_chunk(
             f = F[w]
             for j in range(gw_idx.shape[1]):
                 q1[gw_idx[w, j]] -= gw_val[w, j] * f
-        if (step0 + s) % store_every == 0:
+        if to_store == 0:
+            to_store = store_every
             for i in range(n):
                 out_q[stored, i] = z[i]
                 out_v[stored, i] = (q1[i] - z[n + i]) * inv2dt
@@ -159,6 +161,7 @@ def integrate_chunk(
                 out_fw[stored, w] = F[w]
                 out_vw[stored, w] = v[w]
             stored += 1
+        to_store -= 1
         for i in range(n):
             z[n + i] = z[i]
             z[i] = q1[i]
