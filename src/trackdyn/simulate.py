@@ -12,6 +12,7 @@ from trackdyn.solver.central import (
     contact_table_force,
     highest_frequency,
     integrate_chunk,
+    start_state,
     step_matrices,
 )
 from trackdyn.track.track import LinearisedTrack, Track, load_surface
@@ -126,8 +127,9 @@ def simulate(
 ) -> xr.Dataset:
     """Run a vehicle model over a track at constant speed.
 
-    The vehicle starts at static equilibrium with its rearmost axle at ``start`` and runs
-    until its foremost axle reaches ``end``.
+    The vehicle starts with its rearmost axle at ``start`` in the static equilibrium of
+    that position, moving with the track (its velocity is that of the static equilibrium
+    carried along the track), and runs until its foremost axle reaches ``end``.
 
     Parameters
     ----------
@@ -193,10 +195,14 @@ def simulate(
     n_steps = int(np.floor((c1 - c0) / (speed * dt))) + 1
     inputs = _Inputs(m, lin, nonlinear)
     mats = step_matrices(m, dt)
-    k0, r0, t0 = inputs(np.array([c0]))
-    _, loaded0, _ = _Inputs(m, lin, nonlinear=False)(np.array([c0]))
-    q0 = _static_state(m, k0[0], loaded0[0], r0[0], t0, getattr(inputs, "grid", None))
-    z = np.r_[q0, q0]  # start at rest: q-1 = q0
+    # Start on the static path: the vehicle moves with the track under it from the first
+    # step instead of hitting its slope at rest.
+    first = c0 + speed * dt * np.arange(3)
+    k0, r0, t0 = inputs(first)
+    _, loaded0, _ = _Inputs(m, lin, nonlinear=False)(first)
+    grid = getattr(inputs, "grid", None)
+    q = [_static_state(m, k0[i], loaded0[i], r0[i], t0[i : i + 1], grid) for i in range(3)]
+    z = start_state(m, mats[-1], q, dt)
     if store_every is None:
         store_every = max(1, round(OUTPUT_STEP / dt))
     n_store = (n_steps - 1) // store_every + 1

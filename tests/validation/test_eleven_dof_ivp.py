@@ -208,13 +208,14 @@ class SeedEquations:
         ]  # fmt: skip
         return np.array(s[11:] + acc)
 
-    def static_state(self):
-        """Equilibrium at t = 0: zero velocity, so zero friction (F = C_slope v = 0) and
-        the equations are linear, ``A q + c = 0``; A and c are read off the accelerations."""
+    def static_state(self, t=0.0):
+        """Equilibrium for the input at time t: zero velocity, so zero friction
+        (F = C_slope v = 0) and the equations are linear, ``A q + c = 0``; A and c are
+        read off the accelerations."""
         zero = np.zeros(22)
-        c = self.rhs(0.0, zero, friction=False)[11:]
+        c = self.rhs(t, zero, friction=False)[11:]
         a = np.column_stack(
-            [self.rhs(0.0, np.r_[e, np.zeros(11)], friction=False)[11:] - c for e in np.eye(11)]
+            [self.rhs(t, np.r_[e, np.zeros(11)], friction=False)[11:] - c for e in np.eye(11)]
         )
         return np.linalg.solve(a, -c)
 
@@ -249,7 +250,9 @@ def case():
     breaks = track.supports.position
     knots = np.concatenate([(breaks - x - c0) / SPEED for pair in axles.values() for x in pair])
     dense = np.arange(0.0, t_end, 2e-4)
-    knots = np.unique(np.concatenate([[0.0, t_end], dense, knots[(knots > 0) & (knots < t_end)]]))
+    dt = ds.attrs["time_step_s"]
+    start = [0.0, dt, 2 * dt, t_end]  # the static path's first points (initial velocity)
+    knots = np.unique(np.concatenate([start, dense, knots[(knots > 0) & (knots < t_end)]]))
     centre = c0 + SPEED * knots
     k_table = np.zeros((knots.size, 4))
     r_table = np.zeros((knots.size, 4))
@@ -262,10 +265,14 @@ def case():
     eq = SeedEquations(v, knots, k_table, r_table)
 
     q0 = eq.static_state()
+    # The initial condition is defined as simulate defines it: at rest relative to the
+    # track, with the velocity of the static equilibrium carried along the track, taken as
+    # the second-order one-sided difference of the static states at t = 0, dt, 2 dt.
+    v0 = (-3 * q0 + 4 * eq.static_state(dt) - eq.static_state(2 * dt)) / (2 * dt)
     sol = solve_ivp(
         eq.rhs,
         (0.0, t_end),
-        np.r_[q0, np.zeros(11)],
+        np.r_[q0, v0],
         method="DOP853",
         t_eval=ds.time.values,
         rtol=RTOL_IVP,

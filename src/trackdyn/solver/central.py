@@ -168,6 +168,37 @@ def integrate_chunk(
     return -1
 
 
+def wedge_forces(wedge, d, v):
+    """Friction force of each wedge (eqs 5.30-5.33) [N], outside the compiled loop.
+
+    Parameters
+    ----------
+    wedge : ndarray
+        Per wedge ``x_ss``, slip factors and ``C_slope``, as from `step_matrices`.
+    d : ndarray
+        Displacement across each suspension [m].
+    v : ndarray
+        Relative velocity across each suspension [m/s].
+    """
+    normal = np.maximum(wedge[:, 0] + d, 0.0)
+    return np.clip(wedge[:, 3] * v, -normal * wedge[:, 2], normal * wedge[:, 1])
+
+
+def start_state(model, wedge, q, dt):
+    """``z = [q0, q-1]`` for a start on the static path ``q`` (states at t = 0, dt, 2dt).
+
+    The velocity is that of the static path (second-order one-sided difference) and the
+    acceleration follows from the equations of motion (springs and track balance at static
+    equilibrium, leaving damping and friction): ``q-1 = q0 - dt v0 + dt²/2 a0``, a start
+    that keeps the scheme second-order accurate.
+    """
+    q0, q1, q2 = q
+    v0 = (-3 * q0 + 4 * q1 - q2) / (2 * dt)
+    friction = wedge_forces(wedge, model.Dw @ q0, model.Dw @ v0)
+    a0 = -(model.C @ v0 + model.Dw.T @ friction) / np.diag(model.M)
+    return np.r_[q0, q0 - dt * v0 + 0.5 * dt**2 * a0]
+
+
 def _sparse_rows(D):
     """Column indices and values of the nonzeros of each row of ``D``, zero-padded.
 
