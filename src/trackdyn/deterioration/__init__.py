@@ -1,0 +1,31 @@
+"""Track deterioration over accumulated traffic: dynamic loads, settlement, new geometry.
+
+``predict`` runs the loop on one section; ``load_law`` reads a settlement law and its
+parameters; `trackdyn.deterioration.sections` reads scenario files and runs many sections
+through Dask.
+"""
+
+from trackdyn.deterioration.loop import LoopOptions, Traffic, predict, settled_geometry
+from trackdyn.deterioration.settlement import (
+    LAWS,
+    PowerLaw,
+    SatoLaw,
+    SettlementLaw,
+    ShentonLaw,
+    load_law,
+    time_hardening_increment,
+)
+
+__all__ = [
+    "LAWS",
+    "LoopOptions",
+    "PowerLaw",
+    "SatoLaw",
+    "SettlementLaw",
+    "ShentonLaw",
+    "Traffic",
+    "load_law",
+    "predict",
+    "settled_geometry",
+    "time_hardening_increment",
+]

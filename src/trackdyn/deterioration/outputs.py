@@ -1,0 +1,132 @@
+"""Files of a deterioration prediction: netCDF per section, CSV tables, figures."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from trackdyn.deterioration import plots
+from trackdyn.deterioration.sections import summary
+from trackdyn.io import write_netcdf
+
+
+def settlement_table(ds) -> pd.DataFrame:
+    """Settlement per sleeper and rail at the snapshot tonnages [mm], one column each.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Result of `trackdyn.deterioration.predict` with a ``section`` attribute.
+    """
+    frames = []
+    at = ds.settlement.sel(mgt=ds.snapshot_mgt.values)
+    for rail in ds.rail.values:
+        frame = pd.DataFrame({"distance_m": ds.sleeper_distance.values, "rail": str(rail)})
+        for k, mgt in enumerate(ds.snapshot_mgt.values):
+            frame[f"settlement_mm_at_{mgt:g}_MGT"] = at.isel(mgt=k).sel(rail=rail).values * 1e3
+        frames.append(frame)
+    return pd.concat(frames, ignore_index=True)
+
+
+def quality_table(ds) -> pd.DataFrame:
+    """D1 SD per tonnage, rail and segment [mm], long format.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Result of `trackdyn.deterioration.predict` with a ``section`` attribute.
+    """
+    sd = ds.d1_sd.to_dataframe().reset_index()
+    sd["segment_start_m"] = ds.segment_start.values[sd["segment"]]
+    sd["segment_end_m"] = ds.segment_end.values[sd["segment"]]
+    sd.insert(0, "section", ds.attrs["section"])
+    return sd.rename(columns={"d1_sd": "d1_sd_mm"})[
+        ["section", "mgt", "rail", "segment_start_m", "segment_end_m", "d1_sd_mm"]
+    ]
+
+
+def maintenance_table(ds) -> pd.DataFrame:
+    """Per segment: D1 SD at the start and end per rail [mm], trigger tonnage [MGT].
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Result of `trackdyn.deterioration.predict` with a ``section`` attribute.
+    """
+    frame = pd.DataFrame(
+        {
+            "section": ds.attrs["section"],
+            "segment_start_m": ds.segment_start.values,
+            "segment_end_m": ds.segment_end.values,
+        }
+    )
+    for rail in ds.rail.values:
+        sd = ds.d1_sd.sel(rail=rail)
+        frame[f"d1_sd_{rail}_initial_mm"] = sd.isel(mgt=0).values
+        frame[f"d1_sd_{rail}_final_mm"] = sd.isel(mgt=-1).values
+        frame[f"trigger_{rail}_mgt"] = ds.trigger_mgt.sel(rail=rail).values
+    frame["trigger_mgt"] = ds.trigger_mgt_any_rail.values
+    frame["threshold_sd_mm"] = float(ds.attrs["option_threshold_sd_mm"])
+    return frame
+
+
+def steps_table(ds) -> pd.DataFrame:
+    """Tonnage steps taken: start, end [MGT] and largest settlement [mm].
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Result of `trackdyn.deterioration.predict` with a ``section`` attribute.
+    """
+    return pd.DataFrame(
+        {
+            "section": ds.attrs["section"],
+            "step": np.arange(ds.sizes["step"]) + 1,
+            "start_mgt": ds.step_start.values,
+            "end_mgt": ds.step_end.values,
+            "max_settlement_mm": ds.step_max_settlement.values * 1e3,
+        }
+    )
+
+
+def write_outputs(datasets, folder) -> list[str]:
+    """Write every file of a prediction into ``folder``; return the file names.
+
+    Per section ``<name>``: ``deterioration_<name>.nc``, ``settlement_<name>.csv`` and the
+    figures ``<name>_geometry.png``, ``<name>_quality.png``, ``<name>_settlement_map.png``;
+    for all sections: ``summary.csv``, ``quality.csv``, ``maintenance.csv``, ``steps.csv``.
+
+    Parameters
+    ----------
+    datasets : list of xarray.Dataset
+        Results of `trackdyn.deterioration.predict` with a ``section`` attribute.
+    folder : Path
+        Output folder.
+    """
+    names = []
+
+    def csv(frame, name):
+        frame.to_csv(folder / name, index=False, float_format="%.6g")
+        names.append(name)
+
+    for ds in datasets:
+        name = ds.attrs["section"]
+        write_netcdf(ds, folder / f"deterioration_{name}.nc")
+        names.append(f"deterioration_{name}.nc")
+        csv(settlement_table(ds), f"settlement_{name}.csv")
+        title = f"{name}: {ds.attrs['traffic']}"
+        for kind, draw in (
+            ("geometry", plots.geometry_evolution),
+            ("quality", plots.quality_evolution),
+            ("settlement_map", plots.settlement_map),
+        ):
+            draw(ds, folder / f"{name}_{kind}.png", title)
+            names.append(f"{name}_{kind}.png")
+    csv(summary(datasets), "summary.csv")
+    for name, table in (
+        ("quality.csv", quality_table),
+        ("maintenance.csv", maintenance_table),
+        ("steps.csv", steps_table),
+    ):
+        csv(pd.concat([table(ds) for ds in datasets], ignore_index=True), name)
+    return names

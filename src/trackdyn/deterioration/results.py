@@ -1,0 +1,180 @@
+"""The deterioration results as one xarray Dataset; geometry quality and maintenance trigger."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import xarray as xr
+
+from trackdyn.track.quality import longitudinal_level, segment_sd
+from trackdyn.track.track import RAILS
+
+
+def d1_sd(geometry, extent, segment_length: float):
+    """D1 standard deviation of each rail per segment [mm], and the segment bounds [m].
+
+    Parameters
+    ----------
+    geometry : Geometry
+        Unloaded space curve.
+    extent : tuple of float
+        Part of the track to assess (where geometry and supports overlap) [m].
+    segment_length : float
+        Segment length [m].
+    """
+    x = geometry.distance
+    inside = (x >= extent[0]) & (x <= extent[1])
+    tables = [
+        segment_sd(x[inside], longitudinal_level(x[inside], geometry.profile(r)[inside], "D1"),
+                   segment_length)
+        for r in RAILS
+    ]  # fmt: skip
+    sd = np.array([t["sd_mm"].to_numpy() for t in tables])
+    return sd, tables[0]["segment_start_m"].to_numpy(), tables[0]["segment_end_m"].to_numpy()
+
+
+def trigger_mgt(mgt, sd, threshold: float):
+    """Tonnage at which each series first reaches ``threshold`` [MGT].
+
+    Linear interpolation between the stored tonnages; 0 if it starts at or above the
+    threshold, ``inf`` if it never reaches it.
+
+    Parameters
+    ----------
+    mgt : ndarray
+        Tonnage of each state, increasing [MGT].
+    sd : ndarray
+        Standard deviation, tonnage on the first axis [mm].
+    threshold : float
+        Maintenance threshold [mm].
+    """
+    sd = np.asarray(sd, dtype=float)
+    out = np.full(sd.shape[1:], np.inf)
+    flat_sd, flat_out = sd.reshape(sd.shape[0], -1), out.reshape(-1)
+    for j in range(flat_sd.shape[1]):
+        above = np.flatnonzero(flat_sd[:, j] >= threshold)
+        if above.size == 0:
+            continue
+        k = above[0]
+        if k == 0:
+            flat_out[j] = mgt[0]
+            continue
+        s0, s1 = flat_sd[k - 1, j], flat_sd[k, j]
+        flat_out[j] = mgt[k - 1] + (threshold - s0) / (s1 - s0) * (mgt[k] - mgt[k - 1])
+    return out
+
+
+def make_dataset(track, history, steps, snap_at, cycles, traffic, law, options) -> xr.Dataset:
+    """Assemble the loop's record into a Dataset with units in the attributes.
+
+    Variables: ``settlement`` (mgt, rail, sleeper) [m], positive down; ``d1_sd`` (mgt, rail,
+    segment) [mm]; ``trigger_mgt`` (rail, segment) [MGT], when the D1 SD first reaches
+    ``threshold_sd_mm`` (inf: not within the horizon), and ``trigger_mgt_any_rail``
+    (segment); ``profile`` (snapshot, rail, distance) [m], the unloaded space curve at the
+    snapshot tonnages; ``load_cycles`` (rail, sleeper) [-], cycles applied in total;
+    per step: ``step_start``, ``step_end`` [MGT], ``step_max_settlement`` [m] and
+    ``peak_rail_seat_load`` (step, rail, sleeper) [N], the largest load of the step.
+
+    Parameters
+    ----------
+    track : Track
+        The section as measured (initial geometry, supports).
+    history : dict
+        ``mgt`` [MGT], ``settlement`` [m] and ``geometry`` after each step, initial first.
+    steps : dict
+        ``start``, ``end`` [MGT], ``peak_load`` [N] and ``max_settlement`` [m] per step.
+    snap_at : ndarray
+        Snapshot tonnages, each one of ``history["mgt"]`` [MGT].
+    cycles : ndarray
+        Load cycles applied per rail and sleeper [-].
+    traffic : sequence of Traffic
+        The traffic mix.
+    law : SettlementLaw
+        The settlement law.
+    options : LoopOptions
+        The loop options.
+    """
+    mgt = np.array(history["mgt"])
+    pos = track.supports.position
+    extent = track.extent
+    quality = [d1_sd(g, extent, options.segment_length) for g in history["geometry"]]
+    sd = np.array([q[0] for q in quality])
+    starts, ends = quality[0][1], quality[0][2]
+    trigger = trigger_mgt(mgt, sd, options.threshold_sd_mm)
+    snap_index = [int(np.argmin(np.abs(mgt - m))) for m in snap_at]
+    g0 = track.geometry
+    profiles = np.array([[history["geometry"][k].profile(r) for r in RAILS] for k in snap_index])
+    n_steps = len(steps["start"])
+    peak = np.array(steps["peak_load"]).reshape(n_steps, len(RAILS), pos.size)
+    ds = xr.Dataset(
+        {
+            "settlement": (
+                ("mgt", "rail", "sleeper"),
+                np.array(history["settlement"]),
+                {"units": "m", "long_name": "sleeper settlement", "positive": "down"},
+            ),
+            "d1_sd": (
+                ("mgt", "rail", "segment"),
+                sd,
+                {"units": "mm", "long_name": "standard deviation of D1 longitudinal level"},
+            ),
+            "trigger_mgt": (
+                ("rail", "segment"),
+                trigger,
+                {"units": "MGT", "long_name": f"tonnage at D1 SD >= {options.threshold_sd_mm} mm"},
+            ),
+            "trigger_mgt_any_rail": (
+                "segment",
+                trigger.min(axis=0),
+                {"units": "MGT", "long_name": "first tonnage at which either rail triggers"},
+            ),
+            "profile": (
+                ("snapshot", "rail", "distance"),
+                profiles,
+                {"units": "m", "long_name": "unloaded vertical space curve", "positive": "down"},
+            ),
+            "load_cycles": (("rail", "sleeper"), cycles, {"units": "1"}),
+            "step_start": ("step", np.array(steps["start"]), {"units": "MGT"}),
+            "step_end": ("step", np.array(steps["end"]), {"units": "MGT"}),
+            "step_max_settlement": (
+                "step",
+                np.array(steps["max_settlement"]),
+                {"units": "m", "long_name": "largest settlement of any sleeper in the step"},
+            ),
+            "peak_rail_seat_load": (
+                ("step", "rail", "sleeper"),
+                peak,
+                {"units": "N", "long_name": "largest rail-seat load of the step"},
+            ),
+        },
+        coords={
+            "mgt": ("mgt", mgt, {"units": "MGT", "long_name": "accumulated traffic"}),
+            "rail": list(RAILS),
+            "sleeper_distance": ("sleeper", pos, {"units": "m"}),
+            "distance": ("distance", g0.distance, {"units": "m"}),
+            "snapshot_mgt": ("snapshot", mgt[snap_index], {"units": "MGT"}),
+            "segment_start": ("segment", starts, {"units": "m"}),
+            "segment_end": ("segment", ends, {"units": "m"}),
+        },
+        attrs={
+            "settlement_law": type(law).__name__,
+            "settlement_parameters_SI": repr(dataclasses.asdict(law)),
+            "traffic": "; ".join(
+                f"{t.label or t.vehicle.name} at {t.speed * 3.6:g} km/h, "
+                f"{t.passages_per_mgt:g} passages/MGT"
+                for t in traffic
+            ),
+            "gross_tonnes_per_mgt_of_traffic": sum(
+                t.gross_mass / 1e3 * t.passages_per_mgt for t in traffic
+            ),
+            "steps": n_steps,
+            "geometry_source": g0.where,
+            "supports_source": track.supports.where,
+            **{
+                f"option_{k}": "default" if v is None else str(v) if isinstance(v, tuple) else v
+                for k, v in dataclasses.asdict(options).items()
+            },
+        },
+    )
+    return ds

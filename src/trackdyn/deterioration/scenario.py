@@ -1,0 +1,222 @@
+"""Deterioration scenario files (TOML) for `trackdyn deteriorate`.
+
+```toml
+model = "11dof"                 # 4dof, 7dof or 11dof (both rails needed)
+delta = 0.3                     # dynamic wheel load increment of the linearisation
+# dt_s = 2e-4                   # optional; default chosen by simulate
+
+[[traffic]]                     # one table per kind of vehicle; none: no traffic
+vehicle = "loaded"              # preset, or a vehicle file "wagon.toml" (relative)
+overrides = {}                  # vehicle parameters, SI units
+speed_kmh = 60
+passages_per_mgt = 8065         # 1e6 t / (104 t + 20 t) for alternating loaded and empty
+
+[[traffic]]
+vehicle = "empty"
+speed_kmh = 60
+passages_per_mgt = 8065
+
+[settlement]
+law = "power"                   # power, shenton or sato
+# file = "settlement.toml"      # default: the shipped illustrative, uncalibrated values
+overrides = {}                  # law parameters, SI units
+scatter_cov = 0.0               # lognormal scatter of each sleeper's settlement
+seed = 0
+
+[loop]
+total_mgt = 50
+max_step_settlement_mm = 0.5
+snapshot_every_mgt = 10
+threshold_sd_mm = 3.0           # D1 SD that triggers maintenance
+segment_length_m = 200
+max_steps = 1000
+
+[track]                         # omit for the built-in example section
+geometry = "geometry.csv"
+supports = "supports.csv"
+# sections = "sections.csv"     # or a list of sections: name,geometry,supports
+rail = "60E1"                   # rail section for the load distribution (EI)
+```
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Literal
+
+from pydantic import (
+    Field,
+    NonNegativeFloat,
+    PositiveFloat,
+    PositiveInt,
+    field_validator,
+    model_validator,
+)
+
+from trackdyn.errors import TrackdynInputError
+from trackdyn.scenario import Strict, parse, read_toml
+
+
+class TrafficSpec(Strict):
+    """``[[traffic]]``: ``vehicle`` preset or file, ``overrides`` [SI], ``speed_kmh`` [km/h],
+    ``passages_per_mgt`` [-], optional ``label``."""
+
+    vehicle: str = "loaded"
+    overrides: dict[str, float] = Field(default_factory=dict)
+    speed_kmh: PositiveFloat = 60.0
+    passages_per_mgt: NonNegativeFloat
+    label: str | None = None
+
+    def load(self, base: Path):
+        """The vehicle of this entry (a preset, or a file relative to ``base``)."""
+        from trackdyn.vehicle.parameters import load_vehicle
+
+        source = base / self.vehicle if self.vehicle.endswith(".toml") else self.vehicle
+        return load_vehicle(source, **self.overrides)
+
+
+DEFAULT_TRAFFIC = [
+    TrafficSpec(vehicle="loaded", speed_kmh=60.0, passages_per_mgt=8065.0),
+    TrafficSpec(vehicle="empty", speed_kmh=60.0, passages_per_mgt=8065.0),
+]
+"""Alternating loaded (104 t) and empty (20 t) coal wagons: 1e6 t / 124 t = 8065 each."""
+
+
+class SettlementSpec(Strict):
+    """``[settlement]``: ``law`` name, parameter ``file``, ``overrides`` [SI], lognormal
+    ``scatter_cov`` [-] of each sleeper's settlement and its ``seed``."""
+
+    law: str = "power"
+    file: Path | None = None
+    overrides: dict[str, float] = Field(default_factory=dict)
+    scatter_cov: NonNegativeFloat = 0.0
+    seed: int = Field(0, ge=0)
+
+    @field_validator("law")
+    @classmethod
+    def _known_law(cls, value):
+        from trackdyn.deterioration.settlement import LAWS
+
+        if value not in LAWS:
+            raise ValueError(f"unknown settlement law {value!r}; known: {', '.join(LAWS)}")
+        return value
+
+
+class LoopSpec(Strict):
+    """``[loop]``: ``total_mgt`` [MGT], ``max_step_settlement_mm`` [mm],
+    ``snapshot_every_mgt`` [MGT], ``threshold_sd_mm`` [mm] (D1 SD of maintenance),
+    ``segment_length_m`` [m], ``max_steps``."""
+
+    total_mgt: PositiveFloat = 50.0
+    max_step_settlement_mm: PositiveFloat = 0.5
+    snapshot_every_mgt: PositiveFloat = 10.0
+    threshold_sd_mm: PositiveFloat = 3.0
+    segment_length_m: PositiveFloat = 200.0
+    max_steps: PositiveInt = 1000
+
+
+class TrackSectionsSpec(Strict):
+    """``[track]``: ``geometry`` and ``supports`` CSV files, or a ``sections`` CSV list;
+    ``rail`` section for the bending stiffness EI."""
+
+    geometry: Path | None = None
+    supports: Path | None = None
+    sections: Path | None = None
+    rail: str = "60E1"
+
+    @model_validator(mode="after")
+    def _one_source(self):
+        if self.sections is not None and (self.geometry or self.supports):
+            raise ValueError("give either sections or geometry and supports, not both")
+        if (self.geometry is None) != (self.supports is None):
+            raise ValueError("give both geometry and supports, or neither for the example")
+        return self
+
+
+class DeteriorationScenario(Strict):
+    """A deterioration scenario: ``model``, ``delta`` [-], ``dt_s`` [s] and the tables."""
+
+    model: Literal["4dof", "7dof", "11dof"] = "11dof"
+    delta: float = Field(0.3, gt=0, lt=1)
+    dt_s: PositiveFloat | None = None
+    traffic: list[TrafficSpec] = Field(default_factory=lambda: list(DEFAULT_TRAFFIC))
+    settlement: SettlementSpec = SettlementSpec()
+    loop: LoopSpec = LoopSpec()
+    track: TrackSectionsSpec = TrackSectionsSpec()
+
+
+def load_deterioration(path=None) -> tuple[DeteriorationScenario, Path]:
+    """The deterioration scenario in ``path`` (the built-in example when None) and its folder.
+
+    Parameters
+    ----------
+    path : path, optional
+        Scenario TOML file.
+    """
+    if path is None:
+        return DeteriorationScenario(), Path.cwd()
+    path = Path(path)
+    spec = parse(DeteriorationScenario, read_toml(path), str(path))
+    return spec, path.resolve().parent
+
+
+def loop_options(spec: DeteriorationScenario, seed):
+    """`LoopOptions` of a scenario.
+
+    Parameters
+    ----------
+    spec : DeteriorationScenario
+        The scenario.
+    seed : int or tuple of int
+        Scatter seed of one section.
+    """
+    from trackdyn.deterioration.loop import LoopOptions
+
+    lp = spec.loop
+    return LoopOptions(
+        total_mgt=lp.total_mgt,
+        max_step_settlement=lp.max_step_settlement_mm * 1e-3,
+        snapshot_every_mgt=lp.snapshot_every_mgt,
+        threshold_sd_mm=lp.threshold_sd_mm,
+        segment_length=lp.segment_length_m,
+        max_steps=lp.max_steps,
+        scatter_cov=spec.settlement.scatter_cov,
+        seed=seed,
+        model=spec.model,
+        delta=spec.delta,
+        dt=spec.dt_s,
+        rail=spec.track.rail,
+    )
+
+
+def resolve_inputs(spec: DeteriorationScenario, base: Path):
+    """Traffic and settlement law of a scenario, checked before anything runs.
+
+    Parameters
+    ----------
+    spec : DeteriorationScenario
+        The scenario.
+    base : Path
+        Folder that relative paths in the scenario start from.
+
+    Returns
+    -------
+    traffic : list of Traffic
+    law : SettlementLaw
+    """
+    from trackdyn.deterioration.loop import Traffic
+    from trackdyn.deterioration.settlement import load_law
+    from trackdyn.track.rails import rail_section
+
+    rail_section(spec.track.rail)
+    traffic = []
+    for i, t in enumerate(spec.traffic):
+        try:
+            vehicle = t.load(base)
+        except TrackdynInputError as exc:
+            raise TrackdynInputError(f"traffic {i + 1}: {exc}") from None
+        label = t.label or Path(t.vehicle).stem
+        traffic.append(Traffic(vehicle, t.speed_kmh / 3.6, t.passages_per_mgt, label))
+    s = spec.settlement
+    law = load_law(s.law, None if s.file is None else base / s.file, **s.overrides)
+    return traffic, law

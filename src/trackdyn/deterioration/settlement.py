@@ -1,0 +1,282 @@
+"""Settlement laws: permanent sleeper settlement against load cycles, and their parameters.
+
+Each law splits into a load factor ``f(Q, k2)`` [-] and a cycle function ``g(N)`` [m], so
+that under a constant rail-seat load ``Q`` the settlement after ``N`` cycles is
+``e = f(Q, k2) g(N)``. Over tonnage steps they are integrated with the time-hardening rule
+(`time_hardening_increment`): ``Δe = f(Q) (g(N_{i+1}) - g(N_i))``, which reproduces the
+closed form exactly for a constant load and any step sizes.
+
+Common to all laws: ``f = (Q / Q_ref)^load_exponent (k2 / k_ref)^stiffness_exponent``,
+with ``k2`` the linearised track stiffness per wheel under the sleeper (``stiffness_exponent
+= 0`` switches the stiffness scaling off; a negative value lets softer support settle more).
+
+============  =========================================  ===========================
+law           ``g(N)``                                   own parameters
+============  =========================================  ===========================
+``power``     ``K_s N^beta``                             ``K_s`` [m], ``beta`` [-]
+``shenton``   ``k1 N^0.2 + k2 N``                        ``k1`` [m], ``k2`` [m/cycle]
+``sato``      ``gamma (1 - exp(-alpha N)) + beta N``     ``gamma`` [m], ``alpha``
+                                                         [1/cycle], ``beta`` [m/cycle]
+============  =========================================  ===========================
+
+(Shenton's ``k2`` is his settlement rate per cycle, not the track stiffness.) Parameter
+files give ``value``, ``unit`` and ``source`` for each parameter, one table per law; the
+shipped ``settlement.toml`` holds illustrative values that are not calibrated.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+from importlib.resources import files
+from typing import ClassVar
+
+import numpy as np
+
+from trackdyn.errors import TrackdynInputError
+from trackdyn.scenario import read_toml
+
+DEFAULT_FILE = files("trackdyn.deterioration").joinpath("settlement.toml")
+"""The shipped parameter file (illustrative values, not calibrated)."""
+
+UNITS: dict[str, tuple[str, float]] = {
+    "m": ("m", 1.0),
+    "mm": ("m", 1e-3),
+    "N": ("N", 1.0),
+    "kN": ("N", 1e3),
+    "N/m": ("N/m", 1.0),
+    "kN/mm": ("N/m", 1e6),
+    "MN/m": ("N/m", 1e6),
+    "m/cycle": ("m/cycle", 1.0),
+    "mm/cycle": ("m/cycle", 1e-3),
+    "1/cycle": ("1/cycle", 1.0),
+    "-": ("-", 1.0),
+}
+"""Accepted units: name -> (SI unit it converts to, factor)."""
+
+COMMON = {"Q_ref": "N", "load_exponent": "-", "k_ref": "N/m", "stiffness_exponent": "-"}
+"""Parameters of the load and stiffness factor, shared by all laws, and their SI units."""
+
+
+@dataclass(frozen=True, kw_only=True)
+class SettlementLaw:
+    """Base of the laws: the load and stiffness factor; subclasses add ``g(N)``.
+
+    Parameters
+    ----------
+    Q_ref : float
+        Reference rail-seat load [N].
+    load_exponent : float
+        Exponent of the load ratio ``Q / Q_ref`` [-].
+    k_ref : float
+        Reference track stiffness per wheel [N/m].
+    stiffness_exponent : float
+        Exponent of the stiffness ratio ``k2 / k_ref`` [-].
+    """
+
+    Q_ref: float
+    load_exponent: float
+    k_ref: float
+    stiffness_exponent: float
+
+    units: ClassVar[dict[str, str]] = {}
+    """The law's own parameters and their SI units."""
+    positive: ClassVar[tuple[str, ...]] = ()
+    non_negative: ClassVar[tuple[str, ...]] = ()
+
+    def __post_init__(self):
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise TrackdynInputError(f"settlement parameter {f.name} must be a number")
+            if not math.isfinite(value):
+                raise TrackdynInputError(f"settlement parameter {f.name} must be finite")
+        for name in ("Q_ref", "k_ref", *self.positive):
+            if getattr(self, name) <= 0:
+                raise TrackdynInputError(f"settlement parameter {name} must be > 0")
+        for name in self.non_negative:
+            if getattr(self, name) < 0:
+                raise TrackdynInputError(f"settlement parameter {name} must be >= 0")
+
+    def load_factor(self, Q, k2):
+        """``f(Q, k2) = (Q/Q_ref)^load_exponent (k2/k_ref)^stiffness_exponent`` [-].
+
+        Parameters
+        ----------
+        Q : array_like
+            Rail-seat (sleeper-ballast) load [N]; negative values count as zero.
+        k2 : array_like
+            Track stiffness per wheel over the sleeper [N/m].
+        """
+        q = np.maximum(np.asarray(Q, dtype=float), 0.0) / self.Q_ref
+        k = np.asarray(k2, dtype=float) / self.k_ref
+        return q**self.load_exponent * k**self.stiffness_exponent
+
+    def cycles(self, N):
+        """Settlement at the reference load and stiffness after ``N`` cycles, ``g(N)`` [m].
+
+        Increasing, with ``g(0) = 0``.
+
+        Parameters
+        ----------
+        N : array_like
+            Cumulative number of load cycles [-].
+        """
+        raise NotImplementedError
+
+
+@dataclass(frozen=True, kw_only=True)
+class PowerLaw(SettlementLaw):
+    """``e = K_s (Q/Q_ref)^α (k2/k_ref)^γ N^β`` (α = load_exponent, γ = stiffness_exponent).
+
+    Parameters
+    ----------
+    K_s : float
+        Settlement after one cycle at the reference load and stiffness [m].
+    beta : float
+        Exponent of the number of cycles, 0 < beta <= 1 [-].
+    """
+
+    K_s: float
+    beta: float
+    units: ClassVar[dict[str, str]] = {"K_s": "m", "beta": "-"}
+    positive: ClassVar[tuple[str, ...]] = ("K_s", "beta")
+
+    def __post_init__(self):
+        super().__post_init__()
+        if self.beta > 1:
+            raise TrackdynInputError("settlement parameter beta must be <= 1")
+
+    def cycles(self, N):
+        return self.K_s * np.asarray(N, dtype=float) ** self.beta
+
+
+@dataclass(frozen=True, kw_only=True)
+class ShentonLaw(SettlementLaw):
+    """Shenton: ``e = (k1 N^0.2 + k2 N) (Q/Q_ref)^α (k2_track/k_ref)^γ``.
+
+    ``Q_ref``, ``load_exponent`` (α), ``k_ref`` and ``stiffness_exponent`` (γ) as in
+    `SettlementLaw`.
+
+    Parameters
+    ----------
+    k1 : float
+        Coefficient of ``N^0.2`` [m].
+    k2 : float
+        Settlement rate per cycle of the linear term [m/cycle].
+    """
+
+    k1: float
+    k2: float
+    units: ClassVar[dict[str, str]] = {"k1": "m", "k2": "m/cycle"}
+    positive: ClassVar[tuple[str, ...]] = ("k1",)
+    non_negative: ClassVar[tuple[str, ...]] = ("k2",)
+
+    def cycles(self, N):
+        n = np.asarray(N, dtype=float)
+        return self.k1 * n**0.2 + self.k2 * n
+
+
+@dataclass(frozen=True, kw_only=True)
+class SatoLaw(SettlementLaw):
+    """Sato: ``e = (gamma (1 - exp(-alpha N)) + beta N) (Q/Q_ref)^α_Q (k2/k_ref)^γ_k``.
+
+    ``Q_ref``, ``load_exponent`` (α_Q), ``k_ref`` and ``stiffness_exponent`` (γ_k) as in
+    `SettlementLaw`.
+
+    Parameters
+    ----------
+    gamma : float
+        Initial (consolidation) settlement [m].
+    alpha : float
+        Rate of the initial settlement per cycle [1/cycle].
+    beta : float
+        Settlement rate per cycle of the linear term [m/cycle].
+    """
+
+    gamma: float
+    alpha: float
+    beta: float
+    units: ClassVar[dict[str, str]] = {"gamma": "m", "alpha": "1/cycle", "beta": "m/cycle"}
+    positive: ClassVar[tuple[str, ...]] = ("gamma", "alpha")
+    non_negative: ClassVar[tuple[str, ...]] = ("beta",)
+
+    def cycles(self, N):
+        n = np.asarray(N, dtype=float)
+        return -self.gamma * np.expm1(-self.alpha * n) + self.beta * n
+
+
+LAWS: dict[str, type[SettlementLaw]] = {"power": PowerLaw, "shenton": ShentonLaw, "sato": SatoLaw}
+"""Registry of settlement laws by name; add an entry to plug in another law."""
+
+
+def time_hardening_increment(law: SettlementLaw, factor, N, dN):
+    """Settlement increment over ``dN`` cycles by the time-hardening rule [m].
+
+    ``Δe = factor (g(N + dN) - g(N))``: the cycles already applied set the point on the
+    cycle curve, the load of this step only its scale.
+
+    Parameters
+    ----------
+    law : SettlementLaw
+        The law supplying ``g``.
+    factor : array_like
+        Load factor ``f(Q, k2)`` of the step [-].
+    N : array_like
+        Cycles applied before the step [-].
+    dN : array_like
+        Cycles of the step [-].
+    """
+    N = np.asarray(N, dtype=float)
+    return np.asarray(factor) * (law.cycles(N + dN) - law.cycles(N))
+
+
+def load_law(name: str, path=None, **overrides) -> SettlementLaw:
+    """A settlement law with parameters from a TOML file.
+
+    Parameters
+    ----------
+    name : str
+        Law name, a key of `LAWS`.
+    path : path, optional
+        Parameter file with a table ``[<name>]`` whose entries are tables with ``value``,
+        ``unit`` and ``source``; default the shipped illustrative file.
+    **overrides : float
+        Parameter values replacing the file's [SI units].
+    """
+    if name not in LAWS:
+        raise TrackdynInputError(f"unknown settlement law {name!r}; known: {', '.join(LAWS)}")
+    cls = LAWS[name]
+    where = str(path) if path is not None else "settlement.toml (shipped)"
+    data = read_toml(path if path is not None else DEFAULT_FILE)
+    if name not in data or not isinstance(data[name], dict):
+        raise TrackdynInputError(f"{where}: no table [{name}] for the {name} law")
+    expected = {**COMMON, **cls.units}
+    values = {}
+    for key, entry in data[name].items():
+        if key == "description":
+            continue
+        if key not in expected:
+            raise TrackdynInputError(f"{where}: [{name}] unknown parameter {key!r}")
+        if not isinstance(entry, dict) or set(entry) != {"value", "unit", "source"}:
+            raise TrackdynInputError(f"{where}: [{name}] {key} needs value, unit and source")
+        unit = str(entry["unit"])
+        if unit not in UNITS or UNITS[unit][0] != expected[key]:
+            raise TrackdynInputError(
+                f"{where}: [{name}] unit {unit!r} of {key} does not parse as {expected[key]}"
+            )
+        value = entry["value"]
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise TrackdynInputError(f"{where}: [{name}] value of {key} is not a number")
+        values[key] = float(value) * UNITS[unit][1]
+    unknown = sorted(set(overrides) - set(expected))
+    if unknown:
+        raise TrackdynInputError(f"unknown settlement parameter {unknown[0]!r} for {name}")
+    values.update({k: float(v) for k, v in overrides.items()})
+    missing = [k for k in expected if k not in values]
+    if missing:
+        raise TrackdynInputError(f"{where}: [{name}] missing parameter {missing[0]}")
+    try:
+        return cls(**values)
+    except TrackdynInputError as exc:
+        raise TrackdynInputError(f"{where}: [{name}] {exc}") from None

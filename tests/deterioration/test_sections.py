@@ -1,0 +1,82 @@
+"""Sections lists and their runs through Dask: same results with 1 and 2 workers."""
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from trackdyn.deterioration.scenario import load_deterioration
+from trackdyn.deterioration.sections import read_sections, run_sections, section_tasks
+from trackdyn.errors import TrackdynInputError
+from trackdyn.io import write_geometry, write_supports
+from trackdyn.track.synthetic import SoftSpot, synthetic_track
+
+SCENARIO = """
+model = "7dof"
+[[traffic]]
+vehicle = "loaded"
+speed_kmh = 60
+passages_per_mgt = 8065
+[settlement]
+law = "power"
+scatter_cov = 0.1
+seed = 4
+[loop]
+total_mgt = 2
+snapshot_every_mgt = 1
+segment_length_m = 50
+[track]
+sections = "sections.csv"
+"""
+
+
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory):
+    """Two 100 m sections (one with a soft spot) listed in sections.csv, and a scenario."""
+    path = tmp_path_factory.mktemp("sections")
+    (path / "tracks").mkdir()
+    for name, seed, features in (("a", 1, ()), ("b", 2, (SoftSpot(50.0, 6.0),))):
+        trk = synthetic_track(100.0, spectrum="fra5", seed=seed, features=features)
+        write_geometry(trk.geometry, path / "tracks" / f"{name}_geometry.csv")
+        write_supports(trk.supports, path / "tracks" / f"{name}_supports.csv")
+    (path / "sections.csv").write_text(
+        "name,geometry,supports\n"
+        "a,tracks/a_geometry.csv,tracks/a_supports.csv\n"
+        "b,tracks/b_geometry.csv,tracks/b_supports.csv\n"
+    )
+    (path / "scenario.toml").write_text(SCENARIO)
+    return path
+
+
+def test_one_and_two_workers_give_identical_results(folder):
+    spec, base = load_deterioration(folder / "scenario.toml")
+    tasks = section_tasks(spec, base)
+    assert [t.section.name for t in tasks] == ["a", "b"]
+    serial = run_sections(tasks, workers=1)
+    cluster = run_sections(tasks, workers=2)  # a real distributed.LocalCluster
+    for one, two in zip(serial, cluster, strict=True):
+        xr.testing.assert_identical(one, two)
+    # the sections differ (different tracks, per-section scatter seeds)
+    a, b = (ds.settlement.isel(mgt=-1).values for ds in serial)
+    assert a.shape == b.shape and not np.allclose(a, b)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("name,geometry\na,x.csv\n", "no column 'supports'"),
+        ("name,geometry,supports\n", "no sections listed"),
+        ("name,geometry,supports\na,nope.csv,nope.csv\n", "line 2: geometry file 'nope.csv'"),
+        (
+            "name,geometry,supports\n"
+            "a,tracks/a_geometry.csv,tracks/a_supports.csv\n"
+            "a,tracks/b_geometry.csv,tracks/b_supports.csv\n",
+            "line 3: section name 'a' is empty, repeated",
+        ),
+        ("name,geometry,supports\na b,tracks/a_geometry.csv,tracks/a_supports.csv\n", "'a b'"),
+    ],
+)
+def test_bad_sections_lists(folder, text, message):
+    path = folder / "bad_sections.csv"
+    path.write_text(text)
+    with pytest.raises(TrackdynInputError, match=message):
+        read_sections(path)
