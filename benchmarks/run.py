@@ -74,14 +74,14 @@ def main():
     lin = example_track().linearise(vehicle.static_wheel_load)
     dt = 2e-4
     print(
-        f"{'model':<11}{'ns/step':>9}{'python us/step':>16}{'speed-up':>10}"
+        f"{'model':<11}{'ns/step':>9}{'every10':>10}{'python us/step':>16}{'speed-up':>10}"
         f"{'s per km':>10}{'km/s':>8}{'peak MB':>9}"
     )
     for name in MODELS:
         model = build_model(name, vehicle)
         time_kernel(integrate_chunk, model, 10, dt, 1)  # compile
-        t_fast = time_kernel(integrate_chunk, model, steps, dt, 3)
-        t_fast10 = time_kernel(integrate_chunk, model, steps, dt, 3, store_every=10)
+        t_fast = time_kernel(integrate_chunk, model, steps, dt, 5)
+        t_fast10 = time_kernel(integrate_chunk, model, steps, dt, 5, store_every=10)
         t_py = time_kernel(integrate_chunk.py_func, model, py_steps, dt, 1)
         simulate(vehicle, lin, 60 / 3.6, name, end=50.0)  # warm caches
         tracemalloc.start()
