@@ -35,24 +35,10 @@ import numpy as np
 
 from trackdyn.errors import TrackdynInputError
 from trackdyn.scenario import read_toml
+from trackdyn.units import si_value
 
 DEFAULT_FILE = files("trackdyn.deterioration").joinpath("settlement.toml")
 """The shipped parameter file (illustrative values, not calibrated)."""
-
-UNITS: dict[str, tuple[str, float]] = {
-    "m": ("m", 1.0),
-    "mm": ("m", 1e-3),
-    "N": ("N", 1.0),
-    "kN": ("N", 1e3),
-    "N/m": ("N/m", 1.0),
-    "kN/mm": ("N/m", 1e6),
-    "MN/m": ("N/m", 1e6),
-    "m/cycle": ("m/cycle", 1.0),
-    "mm/cycle": ("m/cycle", 1e-3),
-    "1/cycle": ("1/cycle", 1.0),
-    "-": ("-", 1.0),
-}
-"""Accepted units: name -> (SI unit it converts to, factor)."""
 
 COMMON = {"Q_ref": "N", "load_exponent": "-", "k_ref": "N/m", "stiffness_exponent": "-"}
 """Parameters of the load and stiffness factor, shared by all laws, and their SI units."""
@@ -258,17 +244,7 @@ def load_law(name: str, path=None, **overrides) -> SettlementLaw:
             continue
         if key not in expected:
             raise TrackdynInputError(f"{where}: [{name}] unknown parameter {key!r}")
-        if not isinstance(entry, dict) or set(entry) != {"value", "unit", "source"}:
-            raise TrackdynInputError(f"{where}: [{name}] {key} needs value, unit and source")
-        unit = str(entry["unit"])
-        if unit not in UNITS or UNITS[unit][0] != expected[key]:
-            raise TrackdynInputError(
-                f"{where}: [{name}] unit {unit!r} of {key} does not parse as {expected[key]}"
-            )
-        value = entry["value"]
-        if isinstance(value, bool) or not isinstance(value, int | float):
-            raise TrackdynInputError(f"{where}: [{name}] value of {key} is not a number")
-        values[key] = float(value) * UNITS[unit][1]
+        values[key] = si_value(entry, key, expected[key], f"{where}: [{name}]")
     unknown = sorted(set(overrides) - set(expected))
     if unknown:
         raise TrackdynInputError(f"unknown settlement parameter {unknown[0]!r} for {name}")

@@ -10,6 +10,7 @@ from pathlib import Path
 
 from trackdyn.errors import TrackdynInputError
 from trackdyn.scenario import read_toml
+from trackdyn.units import si_value
 
 GRAVITY = 9.81
 """Gravitational acceleration [m/s^2]."""
@@ -37,26 +38,6 @@ PARAMETERS: dict[str, tuple[str, str]] = {
     "mu": ("-", "wedge friction coefficient"),
     "alpha_w": ("rad", "wedge angle"),
     "C_slope": ("N s/m", "slope of the friction law near zero relative velocity"),
-}
-
-# Accepted units: name -> (SI unit it converts to, factor).
-UNITS: dict[str, tuple[str, float]] = {
-    "kg": ("kg", 1.0),
-    "t": ("kg", 1e3),
-    "kg m^2": ("kg m^2", 1.0),
-    "t m^2": ("kg m^2", 1e3),
-    "N/m": ("N/m", 1.0),
-    "kN/m": ("N/m", 1e3),
-    "kN/mm": ("N/m", 1e6),
-    "MN/m": ("N/m", 1e6),
-    "N s/m": ("N s/m", 1.0),
-    "kN s/m": ("N s/m", 1e3),
-    "MN s/m": ("N s/m", 1e6),
-    "m": ("m", 1.0),
-    "mm": ("m", 1e-3),
-    "rad": ("rad", 1.0),
-    "deg": ("rad", math.pi / 180),
-    "-": ("-", 1.0),
 }
 
 MAY_BE_ZERO = {"rho_p", "rho1", "rho2", "mu", "x_ss"}
@@ -173,17 +154,7 @@ def load_vehicle(name_or_path, **overrides) -> Vehicle:
     for key, entry in data.items():
         if key not in PARAMETERS:
             raise TrackdynInputError(f"{path}: unknown vehicle parameter {key!r}")
-        if not isinstance(entry, dict) or not {"value", "unit", "source"} <= set(entry):
-            raise TrackdynInputError(f"{path}: parameter {key} needs value, unit and source")
-        unit = str(entry["unit"])
-        if unit not in UNITS or UNITS[unit][0] != PARAMETERS[key][0]:
-            raise TrackdynInputError(
-                f"{path}: unit {unit!r} of {key} does not parse as {PARAMETERS[key][0]}"
-            )
-        try:
-            values[key] = float(entry["value"]) * UNITS[unit][1]
-        except (TypeError, ValueError):
-            raise TrackdynInputError(f"{path}: value of {key} is not a number") from None
+        values[key] = si_value(entry, key, PARAMETERS[key][0], str(path))
         sources[key] = str(entry["source"])
     missing = [k for k in PARAMETERS if k not in values]
     if missing:
