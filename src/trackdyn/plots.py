@@ -11,7 +11,8 @@ import numpy as np  # noqa: E402
 RAIL_COLOURS = {"left": "tab:blue", "right": "tab:red"}
 
 
-def _save(fig, path) -> None:
+def save(fig, path) -> None:
+    """Write ``fig`` to ``path`` as PNG and close it."""
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
@@ -61,7 +62,7 @@ def track_overview(ds, path) -> None:
         ax.legend(loc="upper right", fontsize=8)
     axes[-1].set_xlabel("distance [m]")
     fig.suptitle(f"Track input, static wheel load {ds.attrs['static_wheel_load_N'] / 1e3:.1f} kN")
-    _save(fig, path)
+    save(fig, path)
 
 
 def load_deflection(lin, path, n: int = 4) -> None:
@@ -97,7 +98,7 @@ def load_deflection(lin, path, n: int = 4) -> None:
     ax.set_title("Load-deflection curves (markers: measured; dashed: linearised over Ps ± ΔP)")
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
-    _save(fig, path)
+    save(fig, path)
 
 
 def deflection_basin(rail, x0, with_gap, without_gap, load, path) -> None:
@@ -114,7 +115,7 @@ def deflection_basin(rail, x0, with_gap, without_gap, load, path) -> None:
     for ax in (ax1, ax2):
         ax.grid(alpha=0.3)
         ax.legend()
-    _save(fig, path)
+    save(fig, path)
 
 
 def wheel_loads(ds, path) -> None:
@@ -141,7 +142,7 @@ def wheel_loads(ds, path) -> None:
     fig.suptitle(
         f"{ds.attrs['model']}, {ds.attrs['vehicle']}, {ds.attrs['speed_m_per_s'] * 3.6:.0f} km/h"
     )
-    _save(fig, path)
+    save(fig, path)
 
 
 def secondary(ds, path) -> None:
@@ -156,7 +157,7 @@ def secondary(ds, path) -> None:
     ax.grid(alpha=0.3)
     if ds.suspension.size:
         ax.legend(fontsize=8, ncol=4)
-    _save(fig, path)
+    save(fig, path)
 
 
 def wedge_friction(ds, path) -> None:
@@ -177,7 +178,7 @@ def wedge_friction(ds, path) -> None:
     ax.grid(alpha=0.3)
     if ds.wedge.size:
         ax.legend(markerscale=8, fontsize=8)
-    _save(fig, path)
+    save(fig, path)
 
 
 def study_matrix(table, path) -> None:
@@ -205,7 +206,7 @@ def study_matrix(table, path) -> None:
         "(iii) stiffness, level track  (iv) both",
         fontsize=9,
     )
-    _save(fig, path)
+    save(fig, path)
 
 
 def tornado(table, path, column: str = "dyn_load_sd_kN") -> None:
@@ -236,7 +237,7 @@ def tornado(table, path, column: str = "dyn_load_sd_kN") -> None:
     ax.set_xlabel(f"change of {column} from the baseline {base:.2f}")
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3, axis="x")
-    _save(fig, path)
+    save(fig, path)
 
 
 def spectra(table, ds, path) -> None:
@@ -257,7 +258,7 @@ def spectra(table, ds, path) -> None:
     ax.set_ylabel("PSD of the dynamic wheel load [kN²/Hz]")
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=6, ncol=3)
-    _save(fig, path)
+    save(fig, path)
 
 
 def speed_sweep(table, path) -> None:
@@ -270,4 +271,4 @@ def speed_sweep(table, path) -> None:
     ax.set_ylabel("dynamic wheel load [kN]")
     ax.grid(alpha=0.3)
     ax.legend()
-    _save(fig, path)
+    save(fig, path)

@@ -2,19 +2,9 @@
 
 from __future__ import annotations
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from trackdyn.plots import RAIL_COLOURS  # noqa: E402
-
-
-def _save(fig, path) -> None:
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+from trackdyn.plots import RAIL_COLOURS, plt, save
 
 
 def geometry_evolution(ds, path, title: str = "") -> None:
@@ -58,7 +48,7 @@ def geometry_evolution(ds, path, title: str = "") -> None:
         ax.legend(loc="upper right", fontsize=7, ncol=2)
     axes[-1].set_xlabel("distance [m]")
     fig.suptitle(title or "Track geometry over accumulated traffic")
-    _save(fig, path)
+    save(fig, path)
 
 
 def quality_evolution(ds, path, title: str = "") -> None:
@@ -94,7 +84,7 @@ def quality_evolution(ds, path, title: str = "") -> None:
     axes[0].set_ylabel("D1 standard deviation [mm]")
     axes[1].legend(fontsize=7, loc="best")
     fig.suptitle(title or "Geometry quality per segment")
-    _save(fig, path)
+    save(fig, path)
 
 
 def settlement_map(ds, path, title: str = "") -> None:
@@ -127,4 +117,4 @@ def settlement_map(ds, path, title: str = "") -> None:
         fig.colorbar(mesh, ax=ax, label="settlement [mm]")
     axes[-1].set_xlabel("sleeper position [m]")
     fig.suptitle(title or "Sleeper settlement")
-    _save(fig, path)
+    save(fig, path)
