@@ -94,7 +94,7 @@ BAD_SCENARIOS = [
     ("[run]\nspeed_kmh = 0\n", "run.speed_kmh"),
     ("[run]\nspeed_kmh = 60\ndt_s = 0.01\n", "beyond the stability limit"),
     ('[run]\nmodel = "3dof"\n', "run.model"),
-    ("[run]\nspeeed = 3\n", "run.speeed"),
+    ("[run]\nspeeed = 3\n", "unknown key 'run.speeed'"),
     ('[track]\ngeometry = "missing.csv"\nsupports = "missing.csv"\n', "missing.csv: no such file"),
     ('[track]\ngeometry = "missing.csv"\n', "give both --geometry and --supports"),
     ("not toml [", "not valid TOML"),

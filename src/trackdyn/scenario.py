@@ -80,6 +80,8 @@ def parse(model: type[BaseModel], data: dict, where: str):
     except ValidationError as exc:
         err = exc.errors()[0]
         loc = ".".join(str(x) for x in err["loc"]) or "(top level)"
+        if err["type"] == "extra_forbidden":
+            raise TrackdynInputError(f"{where}: unknown key {loc!r}") from None
         raise TrackdynInputError(f"{where}: {loc}: {err['msg']}") from None
 
 

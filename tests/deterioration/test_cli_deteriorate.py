@@ -82,7 +82,7 @@ def test_deteriorate_writes_dataset_tables_and_figures(folder, tmp_path):
 
 
 BAD = {
-    "unknown key": ("[loop]\ntotal_tonnes = 5\n", "loop.total_tonnes: Extra inputs"),
+    "unknown key": ("[loop]\ntotal_tonnes = 5\n", "unknown key 'loop.total_tonnes'"),
     "negative tonnage": ("[loop]\ntotal_mgt = -5\n", "loop.total_mgt: Input should be greater"),
     "unknown law": ('[settlement]\nlaw = "linear"\n', "settlement.law: Value error, unknown"),
     "missing file": (
