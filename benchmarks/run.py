@@ -13,7 +13,7 @@ import tracemalloc
 
 import numpy as np
 
-from trackdyn.simulate import simulate
+from trackdyn.simulation import simulate
 from trackdyn.solver.central import integrate_chunk, step_matrices
 from trackdyn.track.synthetic import example_track
 from trackdyn.vehicle.models import build_model

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from trackdyn.errors import TrackdynInputError
-from trackdyn.simulate import OUTPUT_STEP, simulate
+from trackdyn.simulation import OUTPUT_STEP, simulate
 from trackdyn.track.support import SupportCurve
 from trackdyn.track.synthetic import synthetic_track
 from trackdyn.track.track import Geometry, Supports, Track

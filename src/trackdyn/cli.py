@@ -133,7 +133,7 @@ def run(
     from trackdyn import plots
     from trackdyn.results import summary
     from trackdyn.scenario import load_scenario
-    from trackdyn.simulate import simulate
+    from trackdyn.simulation import simulate
 
     spec, base = load_scenario(scenario)
     vehicle = spec.vehicle.load(base)

@@ -9,7 +9,7 @@ from typer.testing import CliRunner
 
 from trackdyn.cli import app
 from trackdyn.io import write_geometry, write_supports
-from trackdyn.simulate import simulate
+from trackdyn.simulation import simulate
 from trackdyn.studies.runner import Task, TrackRef, gather, run_tasks
 from trackdyn.studies.scenarios import RIGID_STIFFNESS, Study, excitation_case, tasks
 from trackdyn.track.synthetic import SoftSpot, synthetic_track

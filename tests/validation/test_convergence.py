@@ -19,7 +19,7 @@ negligible.
 import numpy as np
 import pytest
 
-from trackdyn.simulate import simulate
+from trackdyn.simulation import simulate
 from trackdyn.track.track import Geometry, Supports, Track
 from trackdyn.vehicle.parameters import load_vehicle
 

@@ -25,7 +25,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from trackdyn.simulate import simulate
+from trackdyn.simulation import simulate
 from trackdyn.track.track import Geometry, Supports, Track
 from trackdyn.vehicle.parameters import load_vehicle
 

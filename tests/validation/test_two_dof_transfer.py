@@ -16,7 +16,7 @@ with the 2-DOF lumping of the brief: m1 -> m1/8, mw -> (mw + m2)/4, k1 -> k1/2.
 import numpy as np
 import pytest
 
-from trackdyn.simulate import simulate
+from trackdyn.simulation import simulate
 from trackdyn.track.track import Geometry, Supports, Track
 from trackdyn.vehicle.parameters import load_vehicle
 

@@ -4,7 +4,7 @@ and left/right symmetry."""
 import numpy as np
 import pytest
 
-from trackdyn.simulate import simulate
+from trackdyn.simulation import simulate
 from trackdyn.track.support import SupportCurve
 from trackdyn.track.track import Geometry, Supports, Track
 from trackdyn.vehicle.parameters import load_vehicle

@@ -23,7 +23,7 @@ import dataclasses
 import numpy as np
 
 from trackdyn.errors import TrackdynInputError
-from trackdyn.simulate import simulate, time_step
+from trackdyn.simulation import simulate, time_step
 from trackdyn.track.track import RAILS, LinearisedTrack
 from trackdyn.track.winkler import characteristic_length, modulus_from_stiffness
 from trackdyn.vehicle.models import build_model
@@ -92,7 +92,7 @@ def passage_loads(ds, lin: LinearisedTrack, share: np.ndarray, model) -> np.ndar
     Parameters
     ----------
     ds : xarray.Dataset
-        Result of `trackdyn.simulate.simulate` (``wheel_load``, ``distance``,
+        Result of `trackdyn.simulation.simulate` (``wheel_load``, ``distance``,
         ``contact_offset``, ``contact_rail``).
     lin : LinearisedTrack
         The linearised track of the run.

@@ -1,7 +1,7 @@
 """The deterioration loop: dynamic loads -> sleeper settlement -> new geometry -> loads.
 
 One tonnage step: every vehicle of the traffic runs over the current geometry
-(`trackdyn.simulate.simulate` on the track linearised once per vehicle: the stiffness stays
+(`trackdyn.simulation.simulate` on the track linearised once per vehicle: the stiffness stays
 as measured, only the space curve changes); its wheel loads become rail-seat loads
 (`trackdyn.deterioration.loads`); the settlement law turns them into settlement of each
 sleeper and rail; the settlement is added (positive down) to the unloaded space curve of
@@ -92,7 +92,7 @@ class LoopOptions:
     delta : float
         Dynamic wheel load increment of the linearisation [-].
     dt : float, optional
-        Time step [s]; default that of `trackdyn.simulate.simulate`.
+        Time step [s]; default that of `trackdyn.simulation.simulate`.
     rail : str
         Rail section, for the bending stiffness EI of the load distribution.
     output_spacing : float

@@ -74,7 +74,7 @@ def run_task(task: Task) -> dict:
     Never raises: a failure comes back as ``{"labels", "error"}``.
     """
     from trackdyn.results import summary
-    from trackdyn.simulate import simulate
+    from trackdyn.simulation import simulate
     from trackdyn.vehicle.parameters import load_vehicle
 
     try:
