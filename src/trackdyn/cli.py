@@ -147,6 +147,7 @@ def run(
         dt=r.dt_s,
         store_every=r.store_every,
         delta=r.delta,
+        extrapolate=r.extrapolate,
         nonlinear=r.nonlinear,
         progress=True,
     )

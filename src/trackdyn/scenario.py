@@ -15,6 +15,7 @@ speed_kmh = 60
 dt_s = 2e-4                # optional; default chosen for accuracy
 # store_every = 10         # keep every n-th step; default: one per millisecond
 delta = 0.3
+extrapolate = false         # true: allow Ps ± ΔP beyond the measured curves
 ```
 """
 
@@ -64,6 +65,7 @@ class RunSpec(Strict):
     dt_s: PositiveFloat | None = None
     store_every: PositiveInt | None = None
     delta: float = Field(0.3, gt=0, lt=1)
+    extrapolate: bool = False
     nonlinear: bool = False
 
 

@@ -119,6 +119,7 @@ def simulate(
     dt: float | None = None,
     store_every: int | None = 1,
     delta: float = 0.3,
+    extrapolate: bool = False,
     nonlinear: bool = False,
     start: float | None = None,
     end: float | None = None,
@@ -151,6 +152,8 @@ def simulate(
         `OUTPUT_STEP` seconds.
     delta : float
         Dynamic wheel load increment δ for the linearisation [-].
+    extrapolate : bool
+        Allow the linearisation to go beyond the measured load-deflection curves.
     nonlinear : bool
         Take the instantaneous track stiffness from the bicubic surface of 5.14 instead of
         the linearised track (single-wheel models only).
@@ -173,7 +176,7 @@ def simulate(
     lin = (
         track
         if isinstance(track, LinearisedTrack)
-        else track.linearise(vehicle.static_wheel_load, delta)
+        else track.linearise(vehicle.static_wheel_load, delta, extrapolate=extrapolate)
     )
     lo, hi = lin.track.extent
     rear, front = m.reach

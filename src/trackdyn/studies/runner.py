@@ -51,6 +51,8 @@ class Task:
     dt_s: float | None = None
     store_every: int | None = None
     delta: float = 0.3
+    extrapolate: bool = False
+    nonlinear: bool = False
 
 
 @functools.lru_cache(maxsize=8)
@@ -61,10 +63,10 @@ def _track(geometry, supports):
 
 
 @functools.lru_cache(maxsize=32)
-def _linearised(ref: TrackRef, static_load: float, delta: float):
+def _linearised(ref: TrackRef, static_load: float, delta: float, extrapolate: bool):
     from trackdyn.studies.scenarios import excitation_case
 
-    lin = _track(ref.geometry, ref.supports).linearise(static_load, delta)
+    lin = _track(ref.geometry, ref.supports).linearise(static_load, delta, extrapolate=extrapolate)
     return excitation_case(lin, ref.case)
 
 
@@ -79,7 +81,7 @@ def run_task(task: Task) -> dict:
 
     try:
         vehicle = load_vehicle(task.vehicle, **task.overrides)
-        lin = _linearised(task.track, vehicle.static_wheel_load, task.delta)
+        lin = _linearised(task.track, vehicle.static_wheel_load, task.delta, task.extrapolate)
         speed = task.speed_kmh / 3.6
         ds = simulate(
             vehicle,
@@ -89,6 +91,7 @@ def run_task(task: Task) -> dict:
             dt=task.dt_s,
             store_every=task.store_every,
             delta=task.delta,
+            nonlinear=task.nonlinear,
         )
     except TrackdynInputError as exc:
         return {"labels": task.labels, "error": str(exc)}

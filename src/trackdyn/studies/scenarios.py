@@ -132,6 +132,9 @@ def tasks(study: Study, base: Path) -> list[Task]:
         speed_kmh=r.speed_kmh,
         dt_s=r.dt_s,
         delta=r.delta,
+        extrapolate=r.extrapolate,
+        nonlinear=r.nonlinear,
+        store_every=r.store_every,
     )
     if study.kind == "matrix":
         out = []
