@@ -9,11 +9,6 @@ import xarray as xr
 BODY_MOTIONS = {"body_bounce": "m/s^2", "body_roll": "rad/s^2", "body_pitch": "rad/s^2"}
 
 
-def _dof_units(name: str, order: str) -> str:
-    base = "m" if name.endswith("bounce") else "rad"
-    return base + {"": "", "v": "/s", "a": "/s^2"}[order]
-
-
 def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> xr.Dataset:
     """Assemble the stored arrays of a run into a Dataset with units in the attributes.
 

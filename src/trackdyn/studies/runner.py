@@ -9,7 +9,6 @@ existing cluster. A failing run is reported with its labels and the others still
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import os
 import traceback
@@ -242,8 +241,3 @@ def gather(results: list[dict]):
         if unit in {"kN", "mm", "Hz", "kmh", "s2"}:
             ds[name].attrs["units"] = {"kmh": "km/h", "s2": "m/s^2"}.get(unit, unit)
     return table, ds
-
-
-def with_labels(task: Task, **labels) -> Task:
-    """A copy of ``task`` with more labels."""
-    return dataclasses.replace(task, labels={**task.labels, **labels})
