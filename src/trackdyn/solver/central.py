@@ -41,7 +41,7 @@ def contact_table_force(table, y_start, y_step, deflection):
 @njit(cache=True, fastmath=True, error_model="numpy")
 def integrate_chunk(
     p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dc_idx, dc_val, dw_idx, dw_val,
-    wv_idx, wv_val, wv_c, H, jinv, wedge, static_load,
+    H, jinv, wedge, static_load,
     k_in, r_in, table, y_start, y_step,
     z, dt, step0, store_every, max_iter,
     out_q, out_v, out_a, out_fc, out_fw, out_vw,
@@ -83,18 +83,25 @@ def integrate_chunk(
                 fc[c] -= static_load
             else:
                 fc[c] = k_in[s, c] * (x - r_in[s, c])
+        # q1 without the wedge forces
+        for i in range(n):
+            acc = 0.0
+            for j in range(p_idx.shape[1]):
+                acc += p_val[i, j] * z[p_idx[i, j]]
+            q1[i] = acc
+        for c in range(nc):
+            f = fc[c]
+            for j in range(gc_idx.shape[1]):
+                q1[gc_idx[c, j]] -= gc_val[c, j] * f
         if nw > 0:
-            # wedge velocities if no friction acted: v = Dw (q1 - q-1) / 2Δt, taken straight
-            # from z and fc (precomputed rows) so the Newton solve need not wait for q1
+            # wedge velocities if no friction acted, v = Dw (q1 - q-1) / 2Δt
             for w in range(nw):
                 dd = 0.0
-                for j in range(dw_idx.shape[1]):
-                    dd += dw_val[w, j] * z[dw_idx[w, j]]
                 vv = 0.0
-                for j in range(wv_idx.shape[1]):
-                    vv += wv_val[w, j] * z[wv_idx[w, j]]
-                for c in range(nc):
-                    vv -= wv_c[w, c] * fc[c]
+                for j in range(dw_idx.shape[1]):
+                    col = dw_idx[w, j]
+                    dd += dw_val[w, j] * z[col]
+                    vv += dw_val[w, j] * (q1[col] - z[n + col])
                 vfree[w] = vv * inv2dt
                 normal = wedge[w, 0] + dd
                 if normal < 0.0:
@@ -136,15 +143,6 @@ def integrate_chunk(
             for w in range(nw):
                 if state[w] == 0:
                     F[w] = wedge[w, 3] * v[w]
-        for i in range(n):
-            acc = 0.0
-            for j in range(p_idx.shape[1]):
-                acc += p_val[i, j] * z[p_idx[i, j]]
-            q1[i] = acc
-        for c in range(nc):
-            f = fc[c]
-            for j in range(gc_idx.shape[1]):
-                q1[gc_idx[c, j]] -= gc_val[c, j] * f
         for w in range(nw):
             f = F[w]
             for j in range(gw_idx.shape[1]):
@@ -219,8 +217,7 @@ def step_matrices(model, dt):
 
     The sparse rows (`_sparse_rows`) of ``P = [A^-1 (2M/Δt² - K), -A^-1 (M/Δt² - C/(2Δt))]``
     acting on ``[q0, q-1]``, of ``Gc^T`` and ``Gw^T`` with ``Gc = A^-1 Dc^T`` and
-    ``Gw = A^-1 Dw^T``, of ``Dc``, ``Dw`` and ``Dw P - [0, Dw]`` (the wedge velocity
-    before friction, times 2Δt), and ``Dw Gc`` dense; ``H``; the inverses of
+    ``Gw = A^-1 Dw^T``, and of ``Dc`` and ``Dw``; ``H``; the inverses of
     ``I + H diag(C_slope·stick)`` for every stick/slip combination; and per wedge
     ``x_ss [m]``, the slip force per unit spring
     compression in compression and in extension ``k_ss μ / (tan α_w ∓ μ)`` [N/m], and
@@ -239,11 +236,9 @@ def step_matrices(model, dt):
     for mask in range(2**nw):
         stick = np.array([(mask >> w) & 1 for w in range(nw)], dtype=float)
         jinv[mask] = np.linalg.inv(np.eye(nw) + H * (c_slope * stick)[None, :])
-    Gc = Ainv @ Dc.T
-    wv = Dw @ P - np.hstack([np.zeros_like(Dw), Dw])  # Dw (q1 - q-1) without forces
-    sparse = [_sparse_rows(x) for x in (P, Gc.T, Gw.T, Dc, Dw, wv)]
+    sparse = [_sparse_rows(x) for x in (P, (Ainv @ Dc.T).T, Gw.T, Dc, Dw)]
     wedge = np.ascontiguousarray(wedge.reshape(nw, 4))
-    return (*(a for pair in sparse for a in pair), np.ascontiguousarray(Dw @ Gc), H, jinv, wedge)
+    return (*(a for pair in sparse for a in pair), H, jinv, wedge)
 
 
 def highest_frequency(M, K) -> float:
