@@ -13,6 +13,7 @@ import tracemalloc
 
 import numpy as np
 
+from trackdyn.options import RunOptions
 from trackdyn.simulation import simulate
 from trackdyn.solver.central import integrate_chunk, step_matrices
 from trackdyn.track.synthetic import example_track
@@ -83,10 +84,10 @@ def main():
         t_fast = time_kernel(integrate_chunk, model, steps, dt, 5)
         t_fast10 = time_kernel(integrate_chunk, model, steps, dt, 5, store_every=10)
         t_py = time_kernel(integrate_chunk.py_func, model, py_steps, dt, 1)
-        simulate(vehicle, lin, 60 / 3.6, name, end=50.0)  # warm caches
+        simulate(vehicle, lin, RunOptions(model=name), end=50.0)  # warm caches
         tracemalloc.start()
         t = time.perf_counter()
-        ds = simulate(vehicle, lin, 60 / 3.6, name, end=length)
+        ds = simulate(vehicle, lin, RunOptions(model=name), end=length)
         elapsed = time.perf_counter() - t
         peak = tracemalloc.get_traced_memory()[1] / 2**20
         tracemalloc.stop()

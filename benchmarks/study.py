@@ -12,7 +12,9 @@ import argparse
 import dataclasses
 import time
 
-from trackdyn.studies.runner import Task, run_tasks
+from trackdyn.options import RunOptions
+from trackdyn.parallel import run_tasks
+from trackdyn.studies.runner import Task, run_task
 from trackdyn.vehicle.parameters import load_vehicle
 
 PARAMETERS = ("rho_p", "k1", "kp", "mu", "k_ss", "x_ss", "rho2", "m1")
@@ -26,7 +28,7 @@ def study_tasks(n: int) -> list[Task]:
         for p in PARAMETERS
         for f in FACTORS
     ]
-    return [dataclasses.replace(t, speed_kmh=60.0, store_every=10) for t in runs[:n]]
+    return [dataclasses.replace(t, run=RunOptions(store_every=10)) for t in runs[:n]]
 
 
 def main():
@@ -37,7 +39,7 @@ def main():
     times = {}
     for workers in (1, 2):
         t = time.perf_counter()
-        results = run_tasks(runs, workers=workers)
+        results = run_tasks(runs, run_task, workers=workers)
         times[workers] = time.perf_counter() - t
         failed = [r for r in results if "error" in r]
         assert not failed, failed[0]["error"]

@@ -96,7 +96,7 @@ BAD_SCENARIOS = [
     ('[run]\nmodel = "3dof"\n', "run.model"),
     ("[run]\nspeeed = 3\n", "unknown key 'run.speeed'"),
     ('[track]\ngeometry = "missing.csv"\nsupports = "missing.csv"\n', "missing.csv: no such file"),
-    ('[track]\ngeometry = "missing.csv"\n', "give both --geometry and --supports"),
+    ('[track]\ngeometry = "missing.csv"\n', "give both a geometry and a supports file"),
     ("not toml [", "not valid TOML"),
 ]
 

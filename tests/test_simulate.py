@@ -1,9 +1,12 @@
 """simulate(): output decimation, error reporting, the nonlinear track's static state."""
 
+import re
+
 import numpy as np
 import pytest
 
 from trackdyn.errors import TrackdynInputError
+from trackdyn.options import RunOptions
 from trackdyn.simulation import OUTPUT_STEP, simulate
 from trackdyn.track.support import SupportCurve
 from trackdyn.track.synthetic import synthetic_track
@@ -19,11 +22,11 @@ def lin():
 
 
 def test_store_every_keeps_the_same_steps(lin):
-    full = simulate(V, lin, 20.0, "11dof")
-    every = simulate(V, lin, 20.0, "11dof", store_every=7)
+    full = simulate(V, lin, RunOptions(speed_kmh=72.0, store_every=1))
+    every = simulate(V, lin, RunOptions(speed_kmh=72.0, store_every=7))
     # the stored steps are the same steps of the same computation
     np.testing.assert_array_equal(every.wheel_load, full.wheel_load[::7])
-    auto = simulate(V, lin, 20.0, "11dof", store_every=None)
+    auto = simulate(V, lin, RunOptions(speed_kmh=72.0, store_every=None))
     step = float(auto.time[1] - auto.time[0])
     assert step == pytest.approx(OUTPUT_STEP, rel=0.5)
 
@@ -35,23 +38,28 @@ def test_newton_failure_names_time_and_position(lin):
         match=r"did not converge at t = .* s, vehicle "
         r"centre at .* m",
     ):
-        simulate(V, lin, 20.0, "11dof", newton_max_iter=1)
+        simulate(V, lin, RunOptions(speed_kmh=72.0), newton_max_iter=1)
 
 
 @pytest.mark.parametrize(
-    ("kwargs", "match"),
+    ("options", "match"),
     [
-        ({"speed": 0.0}, "speed must be finite and > 0"),
-        ({"speed": -5.0}, "speed must be finite and > 0"),
-        ({"speed": 20.0, "dt": 0.05}, "beyond the stability limit"),
-        ({"speed": 20.0, "store_every": 0}, "store_every must be a whole number"),
-        ({"speed": 20.0, "model": "3dof"}, "unknown model '3dof'"),
-        ({"speed": 20.0, "start": 70.0}, "shorter than the vehicle's path"),
+        ({"speed_kmh": 0.0}, "speed_kmh: Input should be greater than 0"),
+        ({"speed_kmh": -5.0}, "speed_kmh: Input should be greater than 0"),
+        ({"dt_s": 0.05}, "beyond the stability limit"),
+        ({"store_every": 0}, "store_every: Input should be greater than 0"),
+        ({"model": "3dof"}, "unknown model '3dof'; known: 2dof, 2dof-wedge, 4dof"),
+        ({"modle": "2dof"}, "unknown key 'modle'"),
     ],
 )
-def test_bad_arguments(lin, kwargs, match):
-    with pytest.raises(TrackdynInputError, match=match):
-        simulate(V, lin, **kwargs)
+def test_bad_options(lin, options, match):
+    with pytest.raises(TrackdynInputError, match=re.escape(match)):
+        simulate(V, lin, RunOptions(speed_kmh=72.0).with_(**options))
+
+
+def test_track_shorter_than_the_vehicle_is_refused(lin):
+    with pytest.raises(TrackdynInputError, match="shorter than the vehicle's path"):
+        simulate(V, lin, RunOptions(speed_kmh=72.0), start=70.0)
 
 
 def test_nonlinear_track_with_a_pure_seating_gap():
@@ -65,7 +73,7 @@ def test_nonlinear_track_with_a_pure_seating_gap():
         Geometry(x, 0 * x, 0 * x),
         Supports(sleepers, (curve,) * sleepers.size, (curve,) * sleepers.size),
     )
-    ds = simulate(V, trk, 20.0, "2dof", nonlinear=True)
+    ds = simulate(V, trk, RunOptions(model="2dof", speed_kmh=72.0, nonlinear=True))
     assert float(np.abs(ds.wheel_load - V.static_wheel_load).max()) < 1e-6 * V.static_wheel_load
     wheel = float(ds.displacement.sel(dof="wheel_bounce")[0])
     assert wheel == pytest.approx(1e-3 + V.static_wheel_load / 100e6, rel=1e-3)

@@ -39,6 +39,16 @@ def refuse_bad_input(command):
     return wrapper
 
 
+def _show(table, title: str) -> None:
+    """Print a DataFrame as a rich table, numbers to 3 significant digits."""
+    show = Table(title=title)
+    for col in table.columns:
+        show.add_column(str(col))
+    for row in table.itertuples(index=False):
+        show.add_row(*(v if isinstance(v, str) else f"{v:.3g}" for v in row))
+    console.print(show)
+
+
 def _version(value: bool):
     if value:
         print(f"trackdyn {__version__}")
@@ -76,45 +86,20 @@ def track(
 
     Without --geometry and --supports, the built-in 1 km example section is used.
     """
-    from trackdyn import plots
     from trackdyn.data import load_track
     from trackdyn.errors import require_positive
     from trackdyn.track.rails import rail_section
-    from trackdyn.track.report import track_dataset, voided_basin
+    from trackdyn.track.report import write_track_outputs
 
     require_positive("--wheel-load-kN", wheel_load_kN)
+    if (geometry is None) != (supports is None):
+        raise TrackdynInputError("give both --geometry and --supports, or neither for the example")
     section = rail_section(rail)
     trk = load_track(geometry, supports)
     lin = trk.linearise(wheel_load_kN * 1e3, delta, extrapolate=extrapolate)
-    ds = track_dataset(lin)
-    basin = voided_basin(lin, section)
     with staged_output(out) as stage:
-        write_netcdf(ds, stage / "track.nc")
-        plots.track_overview(ds, stage / "track_overview.png")
-        plots.load_deflection(lin, stage / "load_deflection.png")
-        plots.deflection_basin(*basin, lin.static_load, stage / "deflection_basin.png")
-    table = Table(title=f"Track summary ({trk.geometry.where})")
-    for col in (
-        "rail",
-        "k2 mean [kN/mm]",
-        "k2 min-max [kN/mm]",
-        "ys mean [mm]",
-        "D1 SD max [mm]",
-        "D2 SD max [mm]",
-    ):
-        table.add_column(col)
-    for r, name in enumerate(ds.rail.values):
-        k2 = ds.k2.isel(rail=r) / 1e6
-        sd = ds.sd_unloaded.isel(rail=r)
-        table.add_row(
-            str(name),
-            f"{float(k2.mean()):.1f}",
-            f"{float(k2.min()):.1f}-{float(k2.max()):.1f}",
-            f"{float(ds.ys.isel(rail=r).mean()) * 1e3:.2f}",
-            f"{float(sd.sel(band='D1').max()):.2f}",
-            f"{float(sd.sel(band='D2').max()):.2f}",
-        )
-    console.print(table)
+        table = write_track_outputs(lin, section, stage)
+    _show(table, f"Track summary ({trk.geometry.where})")
     console.print(f"wrote track.nc and 3 figures to {out}")
 
 
@@ -138,19 +123,7 @@ def run(
     spec, base = load_scenario(scenario)
     vehicle = spec.vehicle.load(base)
     trk = spec.track.load(base)
-    r = spec.run
-    ds = simulate(
-        vehicle,
-        trk,
-        r.speed_kmh / 3.6,
-        r.model,
-        dt=r.dt_s,
-        store_every=r.store_every,
-        delta=r.delta,
-        extrapolate=r.extrapolate,
-        nonlinear=r.nonlinear,
-        progress=True,
-    )
+    ds = simulate(vehicle, trk, spec.run, progress=True)
     table = summary(ds)
     with staged_output(out) as stage:
         write_netcdf(ds, stage / "results.nc")
@@ -158,12 +131,7 @@ def run(
         plots.wheel_loads(ds, stage / "wheel_loads.png")
         plots.secondary(ds, stage / "secondary_displacement.png")
         plots.wedge_friction(ds, stage / "wedge_friction.png")
-    show = Table(title=f"{ds.attrs['model']}: {vehicle.name}, {r.speed_kmh:g} km/h")
-    for col in table.columns:
-        show.add_column(col)
-    for row in table.itertuples(index=False):
-        show.add_row(*(v if isinstance(v, str) else f"{v:.3g}" for v in row))
-    console.print(show)
+    _show(table, f"{ds.attrs['model']}: {vehicle.name}, {spec.run.speed_kmh:g} km/h")
     console.print(f"wrote results.nc, summary.csv and 3 figures to {out}")
 
 
@@ -183,35 +151,21 @@ def study(
     ] = None,
 ):
     """Run a study (scenario matrix, parameter variation or speed sweep) on Dask."""
-    from trackdyn import plots
-    from trackdyn.studies.runner import gather, run_tasks
+    from trackdyn.parallel import run_tasks
+    from trackdyn.studies.outputs import write_study
+    from trackdyn.studies.runner import gather, run_task
     from trackdyn.studies.scenarios import load_study, tasks
 
     spec, base = load_study(study_file)
     runs = tasks(spec, base)
-    table, ds = gather(run_tasks(runs, workers=workers, scheduler=scheduler, progress=True))
+    results = run_tasks(runs, run_task, workers=workers, scheduler=scheduler, progress=True)
+    table, ds = gather(results)
     ds.attrs.update(kind=spec.kind, model=spec.run.model)
     with staged_output(out) as stage:
-        write_netcdf(ds, stage / "study.nc")
-        table.to_csv(stage / "study.csv", index=False, float_format="%.4g")
-        ok = (table["error"] == "").any()
-        if ok and spec.kind == "matrix":
-            plots.study_matrix(table, stage / "study_cases.png")
-        if ok and spec.kind == "sensitivity" and not spec.sensitivity.grid:
-            plots.tornado(table, stage / "tornado.png")
-        if ok and spec.kind == "speed":
-            plots.speed_sweep(table, stage / "speed_sweep.png")
-        if ok:
-            plots.spectra(table, ds, stage / "spectra.png")
-    show = Table(title=f"{spec.kind} study, {spec.run.model}: {len(runs)} runs")
-    columns = [c for c in table.columns if c != "error"]
-    for col in columns:
-        show.add_column(col)
-    for _, row in table.iterrows():
-        show.add_row(*(v if isinstance(v, str) else f"{v:.3g}" for v in row[columns]))
-    console.print(show)
+        write_study(table, ds, spec, stage)
+    _show(table.drop(columns="error"), f"{spec.kind} study, {spec.run.model}: {len(runs)} runs")
     for _, row in table[table["error"] != ""].iterrows():
-        labels = ", ".join(f"{c}={row[c]}" for c in columns if c in runs[0].labels)
+        labels = ", ".join(f"{c}={row[c]}" for c in runs[0].labels)
         console.print(f"[red]failed[/red] ({labels}): {row['error']}")
     console.print(f"wrote study.nc, study.csv and figures to {out}")
 
@@ -254,7 +208,7 @@ def deteriorate(
     with staged_output(out) as stage:
         files = write_outputs(datasets, stage)
     table = summary(datasets)
-    show = Table(title=f"Deterioration, {spec.model}: {len(datasets)} section(s)")
+    show = Table(title=f"Deterioration, {spec.run.model}: {len(datasets)} section(s)")
     for col in ("section", "MGT", "steps", "settlement min/mean/max [mm]", "D1 SD max [mm]",
                 "trigger [MGT]"):  # fmt: skip
         show.add_column(col)

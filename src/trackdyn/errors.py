@@ -1,5 +1,7 @@
 """The one exception type for bad input, and the checks that raise it."""
 
+import traceback
+
 import numpy as np
 
 
@@ -53,3 +55,20 @@ def check_series(
     if bad.size:
         raise TrackdynInputError(f"{at}distance is not strictly increasing at row {bad[0] + 1}")
     return x if values is None else (x, z)
+
+
+def error_message(exc: BaseException) -> str:
+    """One line describing a failure of a run that the caller reports and goes on from.
+
+    Refused input keeps its message; anything else (a bug) gets its type and the place it
+    was raised, so a report from a remote worker can be traced.
+
+    Parameters
+    ----------
+    exc : BaseException
+        The exception caught.
+    """
+    if isinstance(exc, TrackdynInputError):
+        return str(exc)
+    last = traceback.extract_tb(exc.__traceback__)[-1]
+    return f"{type(exc).__name__}: {exc} ({last.filename}:{last.lineno})"

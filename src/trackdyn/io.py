@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 import shutil
 import tempfile
+import tomllib
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -173,6 +174,18 @@ def write_supports(supports: Supports, path) -> None:
             )
     frame = pd.concat(rows, ignore_index=True)
     atomic_write(path, lambda tmp: frame.to_csv(tmp, index=False, float_format="%.6g"))
+
+
+def read_toml(path) -> dict:
+    """Read a TOML file; a missing or malformed file is a one-line error."""
+    path = Path(path)
+    try:
+        with open(path, "rb") as fh:
+            return tomllib.load(fh)
+    except OSError:
+        raise TrackdynInputError(f"{path}: cannot read the file") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise TrackdynInputError(f"{path}: not valid TOML ({exc})") from None
 
 
 def atomic_write(path, write) -> None:

@@ -5,7 +5,9 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from trackdyn.errors import TrackdynInputError, require_positive
+from trackdyn.errors import TrackdynInputError
+from trackdyn.options import RunOptions
+from trackdyn.progress import progress_bar
 from trackdyn.results import make_dataset
 from trackdyn.solver.central import (
     STEPS_PER_PERIOD,
@@ -113,14 +115,8 @@ def time_step(model, lin: LinearisedTrack, speed: float) -> tuple[float, float, 
 def simulate(
     vehicle: Vehicle,
     track: Track | LinearisedTrack,
-    speed: float,
-    model: str = "11dof",
+    options: RunOptions | None = None,
     *,
-    dt: float | None = None,
-    store_every: int | None = 1,
-    delta: float = 0.3,
-    extrapolate: bool = False,
-    nonlinear: bool = False,
     start: float | None = None,
     end: float | None = None,
     progress: bool = False,
@@ -137,26 +133,16 @@ def simulate(
     vehicle : Vehicle
         Vehicle parameter set.
     track : Track or LinearisedTrack
-        The track; a `Track` is linearised about the vehicle's static wheel load.
-    speed : float
-        Vehicle speed [m/s].
-    model : str
-        ``2dof``, ``2dof-wedge``, ``4dof``, ``7dof`` or ``11dof``.
-    dt : float, optional
-        Time step [s]. Default: ``STEPS_PER_PERIOD`` steps per period of the highest
-        natural frequency with the stiffest track on the path, and no more than half a
-        geometry sample interval of travel per step. A step beyond the stability limit
-        ``2 / ω_max`` of the explicit scheme is refused.
-    store_every : int or None
-        Keep every n-th step in the output; None keeps one step about every
-        `OUTPUT_STEP` seconds.
-    delta : float
-        Dynamic wheel load increment δ for the linearisation [-].
-    extrapolate : bool
-        Allow the linearisation to go beyond the measured load-deflection curves.
-    nonlinear : bool
-        Take the instantaneous track stiffness from the bicubic surface of 5.14 instead of
-        the linearised track (single-wheel models only).
+        The track; a `Track` is linearised about the vehicle's static wheel load with the
+        options' ``delta`` and ``extrapolate``.
+    options : RunOptions, optional
+        Model, speed, time step, storage, linearisation and track law
+        (`trackdyn.options.RunOptions`; default: the 11-DOF model at 60 km/h). The default
+        time step gives ``STEPS_PER_PERIOD`` steps per period of the highest natural
+        frequency with the stiffest track on the path, and no more than half a geometry
+        sample interval of travel per step; a step beyond the stability limit
+        ``2 / ω_max`` of the explicit scheme is refused. Without ``store_every`` one step
+        is kept about every `OUTPUT_STEP` seconds.
     start, end : float, optional
         Part of the track to run over [m]; default the whole track.
     progress : bool
@@ -169,14 +155,13 @@ def simulate(
     xarray.Dataset
         See `trackdyn.results.make_dataset`.
     """
-    speed = float(require_positive("speed", speed))
-    if store_every is not None and (int(store_every) != store_every or store_every < 1):
-        raise TrackdynInputError(f"store_every must be a whole number >= 1, got {store_every!r}")
-    m = build_model(model, vehicle)
+    o = RunOptions() if options is None else options
+    speed, nonlinear = o.speed, o.nonlinear
+    m = build_model(o.model, vehicle)
     lin = (
         track
         if isinstance(track, LinearisedTrack)
-        else track.linearise(vehicle.static_wheel_load, delta, extrapolate=extrapolate)
+        else track.linearise(vehicle.static_wheel_load, o.delta, extrapolate=o.extrapolate)
     )
     lo, hi = lin.track.extent
     rear, front = m.reach
@@ -189,10 +174,10 @@ def simulate(
             f"{front - rear:.2f} m"
         )
     default_dt, limit, omega = time_step(m, lin, speed)
-    dt = default_dt if dt is None else float(require_positive("dt", dt))
+    dt = default_dt if o.dt_s is None else o.dt_s
     if dt >= limit:
         raise TrackdynInputError(
-            f"time step dt = {dt:.3g} s is beyond the stability limit {limit:.3g} s of the "
+            f"time step dt_s = {dt:.3g} s is beyond the stability limit {limit:.3g} s of the "
             f"explicit scheme (highest natural frequency {omega / 2 / np.pi:.1f} Hz)"
         )
     n_steps = int(np.floor((c1 - c0) / (speed * dt))) + 1
@@ -206,8 +191,7 @@ def simulate(
     grid = getattr(inputs, "grid", None)
     q = [_static_state(m, k0[i], loaded0[i], r0[i], t0[i : i + 1], grid) for i in range(3)]
     z = start_state(m, mats[-1], q, dt)
-    if store_every is None:
-        store_every = max(1, round(OUTPUT_STEP / dt))
+    store_every = o.store_every or max(1, round(OUTPUT_STEP / dt))
     n_store = (n_steps - 1) // store_every + 1
     n, nc, nw = len(m.dof_names), len(m.contact_names), len(m.wedge_names)
     out = {
@@ -225,50 +209,31 @@ def simulate(
     }
     grid = getattr(inputs, "grid", np.array([0.0, 1.0]))
     stored = 0
-    bar = _progress(progress, n_steps, f"{m.name} at {speed * 3.6:.0f} km/h")
-    for first in range(0, n_steps, CHUNK_STEPS):
-        steps = np.arange(first, min(first + CHUNK_STEPS, n_steps))
-        centre = c0 + speed * dt * steps
-        k, r, table = inputs(centre)
-        keep = steps % store_every == 0
-        sl = slice(stored, stored + int(keep.sum()))
-        status = integrate_chunk(
-            *mats, m.static_wheel_load,
-            k, r, table, grid[0], grid[1] - grid[0],
-            z, dt, first, store_every, newton_max_iter,
-            out["q"][sl], out["v"][sl], out["a"][sl], out["fc"][sl], out["fw"][sl],
-            out["vw"][sl],
-        )  # fmt: skip
-        if status >= 0:
-            t = (first + status) * dt
-            raise TrackdynInputError(
-                f"Newton iteration of the wedge friction did not converge at t = {t:.4f} s, "
-                f"vehicle centre at {c0 + speed * t:.2f} m"
-            )
-        out["k"][sl], out["r"][sl] = k[keep], r[keep]
-        stored += int(keep.sum())
-        bar(len(steps))
-    bar(None)
+    label = f"{m.name} at {o.speed_kmh:.0f} km/h [steps]"
+    with progress_bar(progress, n_steps, label) as bar:
+        for first in range(0, n_steps, CHUNK_STEPS):
+            steps = np.arange(first, min(first + CHUNK_STEPS, n_steps))
+            centre = c0 + speed * dt * steps
+            k, r, table = inputs(centre)
+            keep = steps % store_every == 0
+            sl = slice(stored, stored + int(keep.sum()))
+            status = integrate_chunk(
+                *mats, m.static_wheel_load,
+                k, r, table, grid[0], grid[1] - grid[0],
+                z, dt, first, store_every, newton_max_iter,
+                out["q"][sl], out["v"][sl], out["a"][sl], out["fc"][sl], out["fw"][sl],
+                out["vw"][sl],
+            )  # fmt: skip
+            if status >= 0:
+                t = (first + status) * dt
+                raise TrackdynInputError(
+                    f"Newton iteration of the wedge friction did not converge at t = {t:.4f} s, "
+                    f"vehicle centre at {c0 + speed * t:.2f} m"
+                )
+            out["k"][sl], out["r"][sl] = k[keep], r[keep]
+            stored += int(keep.sum())
+            bar.advance(len(steps))
     time = np.arange(n_store) * store_every * dt
     return make_dataset(
         m, vehicle, time, c0 + speed * time, out, dt=dt, speed=speed, nonlinear=nonlinear
     )
-
-
-def _progress(show: bool, total: int, label: str):
-    """A callable advancing a rich progress bar by n steps; ``None`` closes it."""
-    if not show:
-        return lambda n: None
-    from rich.progress import Progress
-
-    prog = Progress(transient=True)
-    task = prog.add_task(label, total=total)
-    prog.start()
-
-    def advance(n):
-        if n is None:
-            prog.stop()
-        else:
-            prog.advance(task, n)
-
-    return advance

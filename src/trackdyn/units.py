@@ -6,6 +6,9 @@ import math
 
 from trackdyn.errors import TrackdynInputError
 
+GRAVITY = 9.81
+"""Gravitational acceleration [m/s^2]."""
+
 UNITS: dict[str, tuple[str, float]] = {
     "kg": ("kg", 1.0),
     "t": ("kg", 1e3),

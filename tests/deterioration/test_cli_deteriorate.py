@@ -13,6 +13,7 @@ from trackdyn.track.synthetic import SoftSpot, synthetic_track
 runner = CliRunner()
 
 SCENARIO = """
+[run]
 model = "7dof"
 [[traffic]]
 vehicle = "loaded"
@@ -84,7 +85,9 @@ def test_deteriorate_writes_dataset_tables_and_figures(folder, tmp_path):
 BAD = {
     "unknown key": ("[loop]\ntotal_tonnes = 5\n", "unknown key 'loop.total_tonnes'"),
     "negative tonnage": ("[loop]\ntotal_mgt = -5\n", "loop.total_mgt: Input should be greater"),
-    "unknown law": ('[settlement]\nlaw = "linear"\n', "settlement.law: Value error, unknown"),
+    "unknown law": ('[settlement]\nlaw = "linear"\n', "settlement.law: unknown"),
+    "moved key": ('model = "7dof"\n', "key 'model' belongs in the [run] table now"),
+    "one-rail model": ('[run]\nmodel = "2dof"\n', "traffic 1: model 2dof has no contact"),
     "missing file": (
         '[track]\ngeometry = "nope.csv"\nsupports = "supports.csv"\n',
         "track.geometry:",

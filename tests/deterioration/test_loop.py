@@ -5,6 +5,7 @@ import pytest
 
 from trackdyn.deterioration import LoopOptions, Traffic, load_law, predict
 from trackdyn.errors import TrackdynInputError
+from trackdyn.options import RunOptions
 from trackdyn.track.synthetic import SoftSpot, synthetic_track
 from trackdyn.vehicle.parameters import load_vehicle
 
@@ -17,7 +18,12 @@ EMPTY = Traffic(load_vehicle("empty"), 60 / 3.6, PASSAGES, "empty")
 
 
 def options(**kw):
-    base = {"model": "7dof", "total_mgt": 5.0, "snapshot_every_mgt": 2.5, "segment_length": 60.0}
+    base = {
+        "run": RunOptions(model="7dof"),
+        "total_mgt": 5.0,
+        "snapshot_every_mgt": 2.5,
+        "segment_length": 60.0,
+    }
     return LoopOptions(**{**base, **kw})
 
 
@@ -111,6 +117,6 @@ def test_bad_options(uniform):
     with pytest.raises(TrackdynInputError, match="passages_per_mgt must be >= 0"):
         predict(uniform, [Traffic(LOADED.vehicle, 10.0, -1.0)], LAW, options())
     with pytest.raises(TrackdynInputError, match="no contact on the right rail"):
-        predict(uniform, [LOADED], LAW, options(model="2dof"))
+        predict(uniform, [LOADED], LAW, options(run=RunOptions(model="2dof")))
     with pytest.raises(TrackdynInputError, match="max_steps = 3"):
         predict(uniform, [LOADED], LAW, options(max_steps=3))

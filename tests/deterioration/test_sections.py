@@ -11,6 +11,7 @@ from trackdyn.io import write_geometry, write_supports
 from trackdyn.track.synthetic import SoftSpot, synthetic_track
 
 SCENARIO = """
+[run]
 model = "7dof"
 [[traffic]]
 vehicle = "loaded"

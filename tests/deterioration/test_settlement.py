@@ -15,7 +15,7 @@ from trackdyn.deterioration.settlement import (
     time_hardening_increment,
 )
 from trackdyn.errors import TrackdynInputError
-from trackdyn.scenario import read_toml
+from trackdyn.io import read_toml
 
 COMMON = {"Q_ref": 50e3, "load_exponent": 2.0, "k_ref": 100e6, "stiffness_exponent": -1.0}
 # Arbitrary but typical values (the shipped file's orders of magnitude), SI units.

@@ -9,9 +9,12 @@ from typer.testing import CliRunner
 
 from trackdyn.cli import app
 from trackdyn.io import write_geometry, write_supports
+from trackdyn.options import RunOptions
+from trackdyn.parallel import run_tasks
 from trackdyn.simulation import simulate
-from trackdyn.studies.runner import Task, TrackRef, gather, run_tasks
-from trackdyn.studies.scenarios import RIGID_STIFFNESS, Study, excitation_case, tasks
+from trackdyn.studies.runner import Task, TrackRef, gather, run_task
+from trackdyn.studies.scenarios import Study, tasks
+from trackdyn.track.excitation import RIGID_STIFFNESS, excitation_case
 from trackdyn.track.synthetic import SoftSpot, synthetic_track
 from trackdyn.vehicle.parameters import load_vehicle
 
@@ -61,7 +64,7 @@ def test_excitation_cases(files):
 
     v = load_vehicle("loaded")
     lin = load_track(files / "g.csv", files / "s.csv").linearise(v.static_wheel_load)
-    ds = simulate(v, excitation_case(lin, "i"), 15.0, "2dof")
+    ds = simulate(v, excitation_case(lin, "i"), RunOptions(model="2dof", speed_kmh=54.0))
     # (i) rigid track: the wheel follows the unloaded space curve; the contact spring
     # (1e11 N/m) compresses by (load change)/k, below 1 micrometre here
     wheel = ds.displacement.sel(dof="wheel_bounce")
@@ -78,9 +81,11 @@ def test_excitation_cases(files):
 
 def small_tasks(files):
     ref = TrackRef(str(files / "g.csv"), str(files / "s.csv"))
-    base = Task(labels={}, track=ref, model="2dof", speed_kmh=50.0)
+    base = Task(labels={}, track=ref, run=RunOptions(model="2dof", speed_kmh=50.0))
     runs = [
-        dataclasses.replace(base, vehicle=v, speed_kmh=s, labels={"vehicle": v, "speed": s})
+        dataclasses.replace(
+            base, vehicle=v, run=base.run.with_(speed_kmh=s), labels={"vehicle": v, "speed": s}
+        )
         for v in ("loaded", "empty")
         for s in (40.0, 80.0)
     ]
@@ -92,8 +97,8 @@ def small_tasks(files):
 
 def test_cluster_gives_the_serial_results_and_reports_failures(files):
     runs = small_tasks(files)
-    serial_table, serial_ds = gather(run_tasks(runs, workers=1))
-    cluster_table, cluster_ds = gather(run_tasks(runs, workers=2))
+    serial_table, serial_ds = gather(run_tasks(runs, run_task, workers=1))
+    cluster_table, cluster_ds = gather(run_tasks(runs, run_task, workers=2))
     pd.testing.assert_frame_equal(serial_table, cluster_table)
     np.testing.assert_array_equal(serial_ds.wheel_load_psd, cluster_ds.wheel_load_psd)
     failed = serial_table[serial_table["error"] != ""]

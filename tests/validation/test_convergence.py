@@ -19,6 +19,7 @@ negligible.
 import numpy as np
 import pytest
 
+from trackdyn.options import RunOptions
 from trackdyn.simulation import simulate
 from trackdyn.track.track import Geometry, Supports, Track
 from trackdyn.vehicle.parameters import load_vehicle
@@ -54,7 +55,11 @@ def test_second_order_convergence(track, model):
 
     def run(refine):
         # store_every = refine keeps the stored times the same for every step size.
-        return simulate(v, lin, SPEED, model, dt=DT / refine, store_every=refine)
+        return simulate(
+            v,
+            lin,
+            RunOptions(model=model, speed_kmh=SPEED * 3.6, dt_s=DT / refine, store_every=refine),
+        )
 
     ref = run(REFINE)
     runs = [run(2**i) for i in range(3)]

@@ -25,6 +25,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
+from trackdyn.options import RunOptions
 from trackdyn.simulation import simulate
 from trackdyn.track.track import Geometry, Supports, Track
 from trackdyn.vehicle.parameters import load_vehicle
@@ -238,8 +239,10 @@ class SeedEquations:
 def case():
     v = load_vehicle("loaded")
     lin = irregular_track().linearise(v.static_wheel_load)
-    ds = simulate(v, lin, SPEED, "11dof")
-    ds_fine = simulate(v, lin, SPEED, "11dof", dt=ds.attrs["time_step_s"] / 4)
+    ds = simulate(v, lin, RunOptions(speed_kmh=SPEED * 3.6, store_every=1))
+    ds_fine = simulate(
+        v, lin, RunOptions(speed_kmh=SPEED * 3.6, dt_s=ds.attrs["time_step_s"] / 4, store_every=1)
+    )
 
     # Axles ahead of the vehicle centre: bogie centres at ±b_cc, axles at ±a about them
     # (5.4.3); the rearmost axle starts at the track start, so the centre starts at b_cc + a.

@@ -16,6 +16,7 @@ with the 2-DOF lumping of the brief: m1 -> m1/8, mw -> (mw + m2)/4, k1 -> k1/2.
 import numpy as np
 import pytest
 
+from trackdyn.options import RunOptions
 from trackdyn.simulation import simulate
 from trackdyn.track.track import Geometry, Supports, Track
 from trackdyn.vehicle.parameters import load_vehicle
@@ -105,7 +106,12 @@ def test_steady_state_wheel_load_matches_transfer_function(case):
     duration = t_skip + 3.0
     offset = VEHICLE.b_cc + VEHICLE.a  # the 2-DOF wheel: leading axle of the front bogie
     track = harmonic_track(wavelength, spacing, SPEED * duration + 2 * offset + 1.0)
-    ds = simulate(VEHICLE, track, SPEED, "2dof", end=SPEED * duration + 2 * offset)
+    ds = simulate(
+        VEHICLE,
+        track,
+        RunOptions(model="2dof", speed_kmh=SPEED * 3.6, store_every=1),
+        end=SPEED * duration + 2 * offset,
+    )
 
     t = ds.time.values
     x_axle = ds.distance.values + offset

@@ -4,6 +4,7 @@ and left/right symmetry."""
 import numpy as np
 import pytest
 
+from trackdyn.options import RunOptions
 from trackdyn.simulation import simulate
 from trackdyn.track.support import SupportCurve
 from trackdyn.track.track import Geometry, Supports, Track
@@ -57,8 +58,16 @@ def stiff_primary():
         # simulate picks dt from the highest natural frequency (the frame on the primary
         # springs, about 3.3 kHz at x 1e4) and refuses an unstable one; the 7-DOF run uses
         # the same dt so that the comparison is of the models, not of the time steps.
-        eleven = simulate(v.replace(kp=v.kp * factor), lin, SPEED, "11dof")
-        seven = simulate(v, lin, SPEED, "7dof", dt=eleven.attrs["time_step_s"])
+        eleven = simulate(
+            v.replace(kp=v.kp * factor), lin, RunOptions(speed_kmh=SPEED * 3.6, store_every=1)
+        )
+        seven = simulate(
+            v,
+            lin,
+            RunOptions(
+                model="7dof", speed_kmh=SPEED * 3.6, dt_s=eleven.attrs["time_step_s"], store_every=1
+            ),
+        )
         n = min(eleven.time.size, seven.time.size)
         out[factor] = (eleven.isel(time=slice(0, n)), seven.isel(time=slice(0, n)))
     return out
@@ -136,7 +145,11 @@ def test_uniform_nonlinear_track_gives_no_dynamic_load(nonlinear):
     # The curve is nonlinear over the load range: the secant over Ps ± 0.3 Ps differs from
     # the secant from zero load, Ps / ys, by the seating gap.
     assert ps / lin.ys[0, 0] < 0.7 * lin.k2[0, 0]
-    ds = simulate(v, track, SPEED, "2dof", nonlinear=nonlinear)
+    ds = simulate(
+        v,
+        track,
+        RunOptions(model="2dof", speed_kmh=SPEED * 3.6, nonlinear=nonlinear, store_every=1),
+    )
     assert np.abs(ds.wheel_load.values - ps).max() < 1e-6 * ps
 
 
@@ -155,7 +168,11 @@ def test_spatial_change_in_deflection_gives_dynamic_load(nonlinear):
     # ys2 - ys1 = 2ΔP / k = 0.77 mm, changes it by 0.07 %).
     np.testing.assert_allclose(lin.k2, lin.k2[0, 0], rtol=2e-3)
     assert lin.ys.max() - lin.ys.min() == pytest.approx(EXTRA_GAP, rel=1e-3)
-    ds = simulate(v, track, SPEED, "2dof", nonlinear=nonlinear)
+    ds = simulate(
+        v,
+        track,
+        RunOptions(model="2dof", speed_kmh=SPEED * 3.6, nonlinear=nonlinear, store_every=1),
+    )
     assert np.abs(ds.wheel_load.values - ps).max() > 0.01 * ps
 
 
@@ -167,7 +184,11 @@ def test_symmetric_input_gives_no_roll(model):
     # With left = right (geometry and stiffness) the equations for the roll coordinates
     # are forced by nothing and start at rest: roll stays zero to round-off. Friction on.
     v = load_vehicle("loaded")
-    ds = simulate(v, irregular_track(seed=5, symmetric=True), SPEED, model)
+    ds = simulate(
+        v,
+        irregular_track(seed=5, symmetric=True),
+        RunOptions(model=model, speed_kmh=SPEED * 3.6, store_every=1),
+    )
     roll = [d for d in ds.dof.values if str(d).endswith("roll")]
     assert len(roll) == {"4dof": 2, "7dof": 3, "11dof": 5}[model]
     assert np.abs(ds.displacement.sel(dof=roll).values).max() < 1e-12  # [rad]

@@ -30,7 +30,9 @@ def load_track(geometry=None, supports=None) -> Track:
         ``distance_m,rail,stiffness_kN_per_mm``.
     """
     if (geometry is None) != (supports is None):
-        raise TrackdynInputError("give both --geometry and --supports, or neither for the example")
+        raise TrackdynInputError(
+            "give both a geometry and a supports file, or neither for the built-in example"
+        )
     if geometry is None:
         geometry, supports = example_path(EXAMPLE_GEOMETRY), example_path(EXAMPLE_SUPPORTS)
     return Track(read_geometry(geometry), read_supports(supports))

@@ -127,29 +127,27 @@ class TrafficRun:
         The track linearised about the vehicle's static wheel load (the stiffness stays as
         measured; `loads` swaps in the current geometry).
     options : LoopOptions
-        Model, time step, linearisation increment and output spacing.
+        Run options (model, time step, linearisation increment) and output spacing.
     EI : float
         Rail bending stiffness [N m^2].
     """
 
     def __init__(self, traffic, lin: LinearisedTrack, options, EI: float):
         self.traffic, self.lin, self.options = traffic, lin, options
-        self.model = build_model(options.model, traffic.vehicle)
+        self.model = build_model(options.run.model, traffic.vehicle)
         self.weights = cycles_per_passage(self.model) * traffic.passages_per_mgt
         self.rails = [RAILS.index(r) for _, _, r in wheels(self.model)]
         self.share = rail_seat_share(lin, EI)
-        self.dt = options.dt or time_step(self.model, lin, traffic.speed)[0]
-        self.every = max(1, int(options.output_spacing / (traffic.speed * self.dt)))
+        dt = options.run.dt_s or time_step(self.model, lin, traffic.speed)[0]
+        every = max(1, int(options.output_spacing / (traffic.speed * dt)))
+        self.run = options.run.with_(speed_kmh=traffic.speed * 3.6, dt_s=dt, store_every=every)
 
     def loads(self, geometry) -> np.ndarray:
         """Rail-seat loads of one passage over ``geometry``, (wheels, sleepers) [N]."""
         lin = dataclasses.replace(
             self.lin, track=dataclasses.replace(self.lin.track, geometry=geometry)
         )
-        ds = simulate(
-            self.traffic.vehicle, lin, self.traffic.speed, self.options.model,
-            dt=self.dt, store_every=self.every, delta=self.options.delta,
-        )  # fmt: skip
+        ds = simulate(self.traffic.vehicle, lin, self.run)
         return passage_loads(ds, lin, self.share, self.model)
 
 

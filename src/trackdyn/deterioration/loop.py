@@ -22,7 +22,6 @@ snapshot tonnages and on ``total_mgt``.
 
 from __future__ import annotations
 
-from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,6 +31,8 @@ from trackdyn.deterioration.loads import TrafficRun, step_loads
 from trackdyn.deterioration.results import d1_sd, make_dataset
 from trackdyn.deterioration.settlement import SettlementLaw, time_hardening_increment
 from trackdyn.errors import TrackdynInputError, require_positive
+from trackdyn.options import RunOptions
+from trackdyn.progress import progress_bar
 from trackdyn.track.rails import rail_section
 from trackdyn.track.track import RAILS, Geometry, Track
 from trackdyn.vehicle.parameters import Vehicle
@@ -87,12 +88,9 @@ class LoopOptions:
         Coefficient of variation of a lognormal factor on each sleeper's settlement [-].
     seed : int or tuple of int
         Seed of that scatter.
-    model : str
-        Vehicle model: ``4dof``, ``7dof`` or ``11dof``.
-    delta : float
-        Dynamic wheel load increment of the linearisation [-].
-    dt : float, optional
-        Time step [s]; default that of `trackdyn.simulation.simulate`.
+    run : RunOptions
+        Model (with wheels on both rails), linearisation increment, time step and solver
+        of the vehicle runs; each vehicle's speed comes from its `Traffic`.
     rail : str
         Rail section, for the bending stiffness EI of the load distribution.
     output_spacing : float
@@ -107,9 +105,7 @@ class LoopOptions:
     max_steps: int = 1000
     scatter_cov: float = 0.0
     seed: int | tuple[int, ...] = 0
-    model: str = "11dof"
-    delta: float = 0.3
-    dt: float | None = None
+    run: RunOptions = RunOptions()
     rail: str = "60E1"
     output_spacing: float = 0.02
 
@@ -195,7 +191,7 @@ def predict(track: Track, traffic, law: SettlementLaw, options=None, *, progress
     e, N, mgt = np.zeros(shape), np.zeros(shape), 0.0
     history = {"mgt": [0.0], "settlement": [e], "geometry": [track.geometry]}
     steps = {"start": [], "end": [], "peak_load": [], "max_settlement": []}
-    with _progress(progress, total) as bar:
+    with progress_bar(progress, total, "tonnage [MGT]") as bar:
         while mgt < total:
             if len(steps["start"]) >= o.max_steps:
                 raise TrackdynInputError(
@@ -216,7 +212,7 @@ def predict(track: Track, traffic, law: SettlementLaw, options=None, *, progress
             history["mgt"].append(mgt)
             history["settlement"].append(e)
             history["geometry"].append(settled_geometry(track.geometry, pos, e))
-            bar(mgt)
+            bar.update(mgt)
     return make_dataset(track, history, steps, snap_at, N, traffic, law, o)
 
 
@@ -231,19 +227,6 @@ def _runs(track: Track, traffic, o: LoopOptions) -> list[TrafficRun]:
         if t.passages_per_mgt > 0:
             load = t.vehicle.static_wheel_load
             if load not in lins:
-                lins[load] = track.linearise(load, o.delta)
+                lins[load] = track.linearise(load, o.run.delta, extrapolate=o.run.extrapolate)
             runs.append(TrafficRun(t, lins[load], o, EI))
     return runs
-
-
-@contextmanager
-def _progress(show: bool, total: float):
-    """Yield a callable moving a rich progress bar to a tonnage [MGT]."""
-    if not show:
-        yield lambda m: None
-        return
-    from rich.progress import Progress
-
-    with Progress(transient=True) as prog:
-        task = prog.add_task("tonnage [MGT]", total=total)
-        yield lambda m: prog.update(task, completed=m)

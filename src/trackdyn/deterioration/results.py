@@ -173,8 +173,16 @@ def make_dataset(track, history, steps, snap_at, cycles, traffic, law, options) 
             "supports_source": track.supports.where,
             **{
                 f"option_{k}": "default" if v is None else str(v) if isinstance(v, tuple) else v
-                for k, v in dataclasses.asdict(options).items()
+                for k, v in _flat_options(options).items()
             },
         },
     )
     return ds
+
+
+def _flat_options(options) -> dict:
+    """Loop options with the run options spelled out as ``run_<name>``."""
+    flat = {f.name: getattr(options, f.name) for f in dataclasses.fields(options)}
+    run = flat.pop("run")
+    flat.update({f"run_{k}": v for k, v in run.model_dump().items()})
+    return {k: str(v) if isinstance(v, bool) else v for k, v in flat.items()}

@@ -1,7 +1,8 @@
 """Deterioration scenario files (TOML) for `trackdyn deteriorate`.
 
 ```toml
-model = "11dof"                 # 4dof, 7dof or 11dof (both rails needed)
+[run]                           # trackdyn.options.RunOptions; speed_kmh comes from [[traffic]]
+model = "11dof"                 # a model with wheels on both rails (4dof, 7dof, 11dof)
 delta = 0.3                     # dynamic wheel load increment of the linearisation
 # dt_s = 2e-4                   # optional; default chosen by simulate
 
@@ -42,7 +43,6 @@ rail = "60E1"                   # rail section for the load distribution (EI)
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Literal
 
 from pydantic import (
     Field,
@@ -54,7 +54,8 @@ from pydantic import (
 )
 
 from trackdyn.errors import TrackdynInputError
-from trackdyn.scenario import Strict, parse, read_toml
+from trackdyn.io import read_toml
+from trackdyn.options import RunOptions, Strict, parse, vehicle_source
 
 
 class TrafficSpec(Strict):
@@ -71,8 +72,7 @@ class TrafficSpec(Strict):
         """The vehicle of this entry (a preset, or a file relative to ``base``)."""
         from trackdyn.vehicle.parameters import load_vehicle
 
-        source = base / self.vehicle if self.vehicle.endswith(".toml") else self.vehicle
-        return load_vehicle(source, **self.overrides)
+        return load_vehicle(vehicle_source(self.vehicle, base), **self.overrides)
 
 
 DEFAULT_TRAFFIC = [
@@ -133,16 +133,26 @@ class TrackSectionsSpec(Strict):
         return self
 
 
-class DeteriorationScenario(Strict):
-    """A deterioration scenario: ``model``, ``delta`` [-], ``dt_s`` [s] and the tables."""
+MOVED_TO_RUN = ("model", "delta", "dt_s")
+"""Top-level keys of earlier scenario files that now belong in ``[run]``."""
 
-    model: Literal["4dof", "7dof", "11dof"] = "11dof"
-    delta: float = Field(0.3, gt=0, lt=1)
-    dt_s: PositiveFloat | None = None
+
+class DeteriorationScenario(Strict):
+    """A deterioration scenario: ``[run]`` options and the traffic, law, loop and track."""
+
+    run: RunOptions = RunOptions()
     traffic: list[TrafficSpec] = Field(default_factory=lambda: list(DEFAULT_TRAFFIC))
     settlement: SettlementSpec = SettlementSpec()
     loop: LoopSpec = LoopSpec()
     track: TrackSectionsSpec = TrackSectionsSpec()
+
+    @model_validator(mode="before")
+    @classmethod
+    def _moved_keys(cls, data):
+        moved = [k for k in MOVED_TO_RUN if isinstance(data, dict) and k in data]
+        if moved:
+            raise ValueError(f"key {moved[0]!r} belongs in the [run] table now")
+        return data
 
 
 def load_deterioration(path=None) -> tuple[DeteriorationScenario, Path]:
@@ -182,9 +192,7 @@ def loop_options(spec: DeteriorationScenario, seed):
         max_steps=lp.max_steps,
         scatter_cov=spec.settlement.scatter_cov,
         seed=seed,
-        model=spec.model,
-        delta=spec.delta,
-        dt=spec.dt_s,
+        run=spec.run,
         rail=spec.track.rail,
     )
 
@@ -204,15 +212,18 @@ def resolve_inputs(spec: DeteriorationScenario, base: Path):
     traffic : list of Traffic
     law : SettlementLaw
     """
+    from trackdyn.deterioration.loads import cycles_per_passage
     from trackdyn.deterioration.loop import Traffic
     from trackdyn.deterioration.settlement import load_law
     from trackdyn.track.rails import rail_section
+    from trackdyn.vehicle.models import build_model
 
     rail_section(spec.track.rail)
     traffic = []
     for i, t in enumerate(spec.traffic):
         try:
             vehicle = t.load(base)
+            cycles_per_passage(build_model(spec.run.model, vehicle))  # wheels on both rails
         except TrackdynInputError as exc:
             raise TrackdynInputError(f"traffic {i + 1}: {exc}") from None
         label = t.label or Path(t.vehicle).stem

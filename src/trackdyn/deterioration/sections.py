@@ -7,7 +7,7 @@ to the CSV file::
     km12,km12_geometry.csv,km12_supports.csv
     km13,km13_geometry.csv,km13_supports.csv
 
-Each section's whole loop is one task of `trackdyn.studies.runner.run_tasks`; the task
+Each section's whole loop is one task of `trackdyn.parallel.run_tasks`; the task
 carries the file paths, the traffic, the law and the options, never the track arrays.
 The scatter seed of section ``i`` is ``(seed, i)``, so results do not depend on how the
 sections are spread over workers.
@@ -16,7 +16,6 @@ sections are spread over workers.
 from __future__ import annotations
 
 import re
-import traceback
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -26,7 +25,7 @@ import pandas as pd
 from trackdyn.deterioration.loop import LoopOptions, predict
 from trackdyn.deterioration.scenario import loop_options, resolve_inputs
 from trackdyn.deterioration.settlement import SettlementLaw
-from trackdyn.errors import TrackdynInputError
+from trackdyn.errors import TrackdynInputError, error_message
 
 NAME = re.compile(r"^[A-Za-z0-9_.-]+$")
 """Section names become parts of file names."""
@@ -157,14 +156,8 @@ def run_section(task: SectionTask) -> dict:
     try:
         track = load_track(task.section.geometry, task.section.supports)
         ds = predict(track, task.traffic, task.law, task.options, progress=task.progress)
-    except TrackdynInputError as exc:
-        return {"name": name, "error": str(exc)}
     except Exception as exc:  # noqa: BLE001 - reported with the section, others go on
-        last = traceback.extract_tb(exc.__traceback__)[-1]
-        return {
-            "name": name,
-            "error": f"{type(exc).__name__}: {exc} ({last.filename}:{last.lineno})",
-        }
+        return {"name": name, "error": error_message(exc)}
     ds.attrs["section"] = name
     return {"name": name, "dataset": ds}
 
@@ -205,13 +198,14 @@ def run_sections(tasks, *, workers=None, scheduler=None, progress=False) -> list
     progress : bool
         Show a progress bar counting finished sections.
     """
-    from trackdyn.studies.runner import run_tasks
+    from trackdyn.parallel import run_tasks
 
     if workers is None and scheduler is None and len(tasks) == 1:
         workers = 1
     results = run_tasks(
-        tasks, func=run_section, workers=workers, scheduler=scheduler, progress=progress
-    )
+        tasks, run_section, workers=workers, scheduler=scheduler, progress=progress,
+        label="sections",
+    )  # fmt: skip
     failed = [r for r in results if "error" in r]
     if failed:
         more = f" ({len(failed) - 1} more sections failed)" if len(failed) > 1 else ""

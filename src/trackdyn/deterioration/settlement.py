@@ -34,7 +34,7 @@ from typing import ClassVar
 import numpy as np
 
 from trackdyn.errors import TrackdynInputError
-from trackdyn.scenario import read_toml
+from trackdyn.io import read_toml
 from trackdyn.units import si_value
 
 DEFAULT_FILE = files("trackdyn.deterioration").joinpath("settlement.toml")

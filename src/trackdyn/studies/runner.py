@@ -1,24 +1,21 @@
-"""Run a list of independent simulations through Dask and gather one table.
+"""One study run as a task for `trackdyn.parallel.run_tasks`, and the table they make.
 
 Each task carries parameters and a reference to the track (file paths, or the built-in
 example), never the track arrays; workers read and linearise the track once and keep it.
-By default the tasks go to a `distributed.LocalCluster` sized to the machine; with
-``workers=1`` they run one after another in this process; with ``scheduler`` they go to an
-existing cluster. A failing run is reported with its labels and the others still finish.
+A failing run is reported with its labels and the others still finish.
 """
 
 from __future__ import annotations
 
 import functools
-import os
-import traceback
 from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 from scipy import signal
 
-from trackdyn.errors import TrackdynInputError
+from trackdyn.errors import error_message
+from trackdyn.options import RunOptions
 
 SPECTRUM_FREQUENCY = np.arange(0.0, 40.0 + 1e-9, 0.125)
 """Common frequency grid of the runs' wheel-load spectra [Hz]."""
@@ -29,7 +26,7 @@ class TrackRef:
     """Where a worker finds the track: CSV paths, or None for the built-in example.
 
     ``case`` names a §5.4.1 excitation case applied after linearisation (see
-    `trackdyn.studies.scenarios.excitation_case`); ``"iv"`` is the track as measured.
+    `trackdyn.track.excitation`); ``"iv"`` is the track as measured.
     """
 
     geometry: str | None = None
@@ -39,19 +36,13 @@ class TrackRef:
 
 @dataclass(frozen=True)
 class Task:
-    """One simulation: labels for the table, vehicle, track reference and run options."""
+    """One simulation: labels for the table, vehicle source, track reference, run options."""
 
     labels: dict
     vehicle: str = "loaded"
     overrides: dict = field(default_factory=dict)
     track: TrackRef = TrackRef()
-    model: str = "11dof"
-    speed_kmh: float = 60.0
-    dt_s: float | None = None
-    store_every: int | None = None
-    delta: float = 0.3
-    extrapolate: bool = False
-    nonlinear: bool = False
+    run: RunOptions = RunOptions()
 
 
 @functools.lru_cache(maxsize=8)
@@ -63,7 +54,7 @@ def _track(geometry, supports):
 
 @functools.lru_cache(maxsize=32)
 def _linearised(ref: TrackRef, static_load: float, delta: float, extrapolate: bool):
-    from trackdyn.studies.scenarios import excitation_case
+    from trackdyn.track.excitation import excitation_case
 
     lin = _track(ref.geometry, ref.supports).linearise(static_load, delta, extrapolate=extrapolate)
     return excitation_case(lin, ref.case)
@@ -80,26 +71,11 @@ def run_task(task: Task) -> dict:
 
     try:
         vehicle = load_vehicle(task.vehicle, **task.overrides)
-        lin = _linearised(task.track, vehicle.static_wheel_load, task.delta, task.extrapolate)
-        speed = task.speed_kmh / 3.6
-        ds = simulate(
-            vehicle,
-            lin,
-            speed,
-            task.model,
-            dt=task.dt_s,
-            store_every=task.store_every,
-            delta=task.delta,
-            nonlinear=task.nonlinear,
-        )
-    except TrackdynInputError as exc:
-        return {"labels": task.labels, "error": str(exc)}
+        r = task.run
+        lin = _linearised(task.track, vehicle.static_wheel_load, r.delta, r.extrapolate)
+        ds = simulate(vehicle, lin, r)
     except Exception as exc:  # noqa: BLE001 - reported with the run's labels, others go on
-        last = traceback.extract_tb(exc.__traceback__)[-1]
-        return {
-            "labels": task.labels,
-            "error": f"{type(exc).__name__}: {exc} ({last.filename}:{last.lineno})",
-        }
+        return {"labels": task.labels, "error": error_message(exc)}
     table = summary(ds)
     dyn = ds.wheel_load.values - ds.attrs["static_wheel_load_N"]
     fs = 1.0 / float(ds.time[1] - ds.time[0])
@@ -114,106 +90,6 @@ def run_task(task: Task) -> dict:
         "dominant_frequency_Hz": float(table["dominant_frequency_Hz"].iloc[0]),
     }
     return {"labels": task.labels, "row": row, "psd": psd}
-
-
-def _client(workers: int | None, scheduler: str | None):
-    import dask
-    from distributed import Client, LocalCluster
-
-    if scheduler:
-        try:
-            return Client(scheduler, timeout="10s"), None
-        except (OSError, TimeoutError) as exc:
-            raise TrackdynInputError(
-                f"cannot reach the Dask scheduler {scheduler}: {exc}"
-            ) from None
-    # Two Dask defaults made a run (1 km, 11-DOF) take 0.56-0.78 s in a worker instead of
-    # 0.38 s: MALLOC_TRIM_THRESHOLD_ turns off glibc's adaptive mmap threshold, so every
-    # large array is mmapped and page-faulted afresh; and the statistical profiler takes
-    # the GIL every 10 ms. Local workers run with neither.
-    settings = {
-        "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
-        "distributed.worker.profile.enabled": False,
-    }
-    with dask.config.set(settings):
-        cluster = LocalCluster(
-            n_workers=workers or os.cpu_count() or 1,
-            threads_per_worker=1,
-            processes=True,
-            dashboard_address=None,
-        )
-    return Client(cluster), cluster
-
-
-def run_tasks(
-    tasks: list,
-    *,
-    func=run_task,
-    workers: int | None = None,
-    scheduler: str | None = None,
-    progress: bool = False,
-) -> list[dict]:
-    """Run ``func`` on every task; results in the order of ``tasks``.
-
-    Parameters
-    ----------
-    tasks : list
-        Independent runs (`Task` for `run_task`); small picklable objects.
-    func : callable
-        Module-level function run on each task; it should report failures in its result
-        rather than raise.
-    workers : int, optional
-        Worker processes of the local cluster (default: one per core); 1 runs the tasks
-        serially in this process.
-    scheduler : str, optional
-        Address of an existing Dask scheduler, e.g. ``tcp://10.0.0.5:8786``.
-    progress : bool
-        Show a progress bar counting finished runs.
-    """
-    if workers is not None and workers < 1:
-        raise TrackdynInputError(f"--workers must be >= 1, got {workers}")
-    bar = _Bar(progress, len(tasks))
-    if workers == 1 and not scheduler:
-        results = []
-        for t in tasks:
-            results.append(func(t))
-            bar.advance()
-        bar.close()
-        return results
-    from distributed import as_completed
-
-    client, cluster = _client(workers, scheduler)
-    try:
-        futures = client.map(func, tasks, pure=False)
-        for _ in as_completed(futures):
-            bar.advance()
-        return client.gather(futures)
-    finally:
-        bar.close()
-        client.close()
-        if cluster is not None:
-            cluster.close()
-
-
-class _Bar:
-    """A rich progress bar counting finished runs (silent when not shown)."""
-
-    def __init__(self, show: bool, total: int):
-        self.progress = None
-        if show:
-            from rich.progress import Progress
-
-            self.progress = Progress(transient=True)
-            self.task = self.progress.add_task("runs", total=total)
-            self.progress.start()
-
-    def advance(self):
-        if self.progress is not None:
-            self.progress.advance(self.task)
-
-    def close(self):
-        if self.progress is not None:
-            self.progress.stop()
 
 
 def gather(results: list[dict]):

@@ -5,12 +5,13 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+import pandas as pd
 import xarray as xr
 
 from trackdyn.track.beam import linear_supports, solve_beam
 from trackdyn.track.quality import longitudinal_level, segment_sd
 from trackdyn.track.track import RAILS, LinearisedTrack
-from trackdyn.vehicle.parameters import GRAVITY
+from trackdyn.units import GRAVITY
 
 QUALITY_BANDS = ("D1", "D2")
 
@@ -110,6 +111,56 @@ def track_dataset(lin: LinearisedTrack) -> xr.Dataset:
         },
     )
     return ds
+
+
+def summary_table(ds: xr.Dataset) -> pd.DataFrame:
+    """One row per rail: linearised stiffness, static deflection, worst D1/D2 quality.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Result of `track_dataset`.
+    """
+    rows = []
+    for r, name in enumerate(ds.rail.values):
+        k2 = ds.k2.isel(rail=r).values / 1e6
+        sd = ds.sd_unloaded.isel(rail=r)
+        rows.append(
+            {
+                "rail": str(name),
+                "k2_mean_kN_per_mm": k2.mean(),
+                "k2_min_kN_per_mm": k2.min(),
+                "k2_max_kN_per_mm": k2.max(),
+                "ys_mean_mm": float(ds.ys.isel(rail=r).mean()) * 1e3,
+                "d1_sd_max_mm": float(sd.sel(band="D1").max()),
+                "d2_sd_max_mm": float(sd.sel(band="D2").max()),
+            }
+        )
+    return pd.DataFrame(rows)
+
+
+def write_track_outputs(lin: LinearisedTrack, rail_section, folder) -> pd.DataFrame:
+    """Write ``track.nc`` and the three track figures into ``folder``; return the summary.
+
+    Parameters
+    ----------
+    lin : LinearisedTrack
+        Track linearised about the static wheel load.
+    rail_section : RailSection
+        Rail of the voided-sleeper deflection basin.
+    folder : Path
+        Output folder.
+    """
+    from trackdyn import plots
+    from trackdyn.io import write_netcdf
+
+    ds = track_dataset(lin)
+    basin = voided_basin(lin, rail_section)
+    write_netcdf(ds, folder / "track.nc")
+    plots.track_overview(ds, folder / "track_overview.png")
+    plots.load_deflection(lin, folder / "load_deflection.png")
+    plots.deflection_basin(*basin, lin.static_load, folder / "deflection_basin.png")
+    return summary_table(ds)
 
 
 def voided_basin(lin: LinearisedTrack, rail_section, window: float = 12.0):

@@ -22,7 +22,7 @@ def _wedge(v: Vehicle, name: str, p: Point, q: Point, scale: float = 1.0) -> Wed
 
 
 def two_dof(v: Vehicle, wedge: bool = False) -> Model:
-    """Eqs 5.12-5.13: one eighth of the body on one wheel of the front-left bogie side.
+    """Eqs 5.12-5.13: one eighth of the body on one wheel, viscous secondary damping.
 
     Body mass ``m1/8``; wheel mass ``(mw + m2)/4`` (no primary suspension); secondary
     stiffness ``k1/2`` and viscous damping ``rho1``, or with ``wedge`` half a side's
@@ -97,15 +97,23 @@ def eleven_dof(v: Vehicle) -> Model:
     return asm.build("11dof", v.static_wheel_load)
 
 
-MODELS = {"2dof": two_dof, "4dof": four_dof, "7dof": seven_dof, "11dof": eleven_dof}
+def two_dof_wedge(v: Vehicle) -> Model:
+    """The 2-DOF model with half a side's friction wedge in place of the viscous damper."""
+    return two_dof(v, wedge=True)
+
+
+MODELS = {
+    "2dof": two_dof,
+    "2dof-wedge": two_dof_wedge,
+    "4dof": four_dof,
+    "7dof": seven_dof,
+    "11dof": eleven_dof,
+}
+"""The models by name: the one list that validators, help texts and errors derive from."""
 
 
 def build_model(name: str, vehicle: Vehicle) -> Model:
-    """Build a model by name: ``2dof``, ``2dof-wedge``, ``4dof``, ``7dof`` or ``11dof``."""
-    if name == "2dof-wedge":
-        return two_dof(vehicle, wedge=True)
+    """Build a model by name, a key of `MODELS`."""
     if name not in MODELS:
-        raise TrackdynInputError(
-            f"unknown model {name!r}; known: 2dof, 2dof-wedge, 4dof, 7dof, 11dof"
-        )
+        raise TrackdynInputError(f"unknown model {name!r}; known: {', '.join(MODELS)}")
     return MODELS[name](vehicle)

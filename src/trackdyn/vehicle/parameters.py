@@ -9,11 +9,8 @@ from importlib.resources import files
 from pathlib import Path
 
 from trackdyn.errors import TrackdynInputError
-from trackdyn.scenario import read_toml
-from trackdyn.units import si_value
-
-GRAVITY = 9.81
-"""Gravitational acceleration [m/s^2]."""
+from trackdyn.io import read_toml
+from trackdyn.units import GRAVITY, si_value
 
 # SI unit of each parameter, and a description for docs and error messages.
 PARAMETERS: dict[str, tuple[str, str]] = {

@@ -1,0 +1,143 @@
+"""Run options and the vehicle source: one definition shared by the API, files and CLI.
+
+`RunOptions` is the ``[run]`` table of every scenario kind (run, study, deteriorate) and
+the options argument of `trackdyn.simulate`; a new option is a new field here. `VehicleSpec`
+is the ``[vehicle]`` table; `vehicle_source` is the one rule that tells a preset name from
+a parameter file.
+
+```toml
+[run]
+model = "11dof"        # see trackdyn.vehicle.models.MODELS
+speed_kmh = 60
+dt_s = 2e-4            # optional; default chosen for accuracy and stability
+store_every = 10       # optional; default: one stored step per millisecond
+delta = 0.3            # dynamic wheel load increment of the linearisation
+extrapolate = false    # true: allow Ps ± ΔP beyond the measured curves
+nonlinear = false      # true: the bicubic track of 5.14 (single-wheel contacts)
+```
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    PositiveFloat,
+    PositiveInt,
+    ValidationError,
+    field_validator,
+)
+
+from trackdyn.errors import TrackdynInputError
+
+class Strict(BaseModel):
+    """Base of scenario tables: unknown keys are refused, values are frozen."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class RunOptions(Strict):
+    """How one vehicle runs over a track.
+
+    Parameters
+    ----------
+    model : str
+        Vehicle model, a key of `trackdyn.vehicle.models.MODELS`.
+    speed_kmh : float
+        Vehicle speed [km/h].
+    dt_s : float, optional
+        Time step [s]; default: `trackdyn.simulation.time_step`.
+    store_every : int, optional
+        Keep every n-th step; default: one stored step about every millisecond.
+    delta : float
+        Dynamic wheel load increment δ of the linearisation (5.9) [-].
+    extrapolate : bool
+        Allow the linearisation to go beyond the measured load-deflection curves.
+    nonlinear : bool
+        Take the track force from the bicubic surface of 5.14 instead of the linearised
+        track (models whose contacts each stand for one wheel).
+    """
+
+    model: str = "11dof"
+    speed_kmh: PositiveFloat = 60.0
+    dt_s: PositiveFloat | None = None
+    store_every: PositiveInt | None = None
+    delta: float = Field(0.3, gt=0, lt=1)
+    extrapolate: bool = False
+    nonlinear: bool = False
+
+    @field_validator("model")
+    @classmethod
+    def _known_model(cls, value):
+        from trackdyn.vehicle.models import MODELS
+
+        if value not in MODELS:
+            raise ValueError(f"unknown model {value!r}; known: {', '.join(MODELS)}")
+        return value
+
+    @property
+    def speed(self) -> float:
+        """Vehicle speed [m/s]."""
+        return self.speed_kmh / 3.6
+
+    def with_(self, **changes) -> RunOptions:
+        """A validated copy with some options changed (names and values checked)."""
+        return parse(RunOptions, {**self.model_dump(), **changes}, "run options")
+
+
+def vehicle_source(name, base: Path | None = None) -> str | Path:
+    """A preset name as it is, or a parameter file (``*.toml``) relative to ``base``.
+
+    Parameters
+    ----------
+    name : str or Path
+        Preset name (``loaded``, ``empty``, ...) or path of a vehicle ``.toml`` file.
+    base : Path, optional
+        Folder a relative file is taken from (the scenario's folder).
+    """
+    if str(name).endswith(".toml"):
+        return Path(base or ".") / name
+    return str(name)
+
+
+class VehicleSpec(Strict):
+    """``[vehicle]``: a ``preset`` or a parameter ``file``, and ``overrides`` [SI units]."""
+
+    preset: str = "loaded"
+    file: Path | None = None
+    overrides: dict[str, float] = Field(default_factory=dict)
+
+    def source(self, base: Path) -> str | Path:
+        """The vehicle source (see `vehicle_source`)."""
+        return vehicle_source(self.file if self.file is not None else self.preset, base)
+
+    def load(self, base: Path):
+        """The vehicle parameter set, overrides applied."""
+        from trackdyn.vehicle.parameters import load_vehicle
+
+        return load_vehicle(self.source(base), **self.overrides)
+
+
+def parse(model: type[BaseModel], data: dict, where: str):
+    """Validate ``data`` against a pydantic ``model``; errors become one-line messages.
+
+    Parameters
+    ----------
+    model : type of pydantic.BaseModel
+        The table's model.
+    data : dict
+        The table as read.
+    where : str
+        File (or other source) named in the message.
+    """
+    try:
+        return model.model_validate(data)
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        loc = ".".join(str(x) for x in err["loc"]) or "(top level)"
+        if err["type"] == "extra_forbidden":
+            raise TrackdynInputError(f"{where}: unknown key {loc!r}") from None
+        msg = err["msg"].removeprefix("Value error, ")
+        raise TrackdynInputError(f"{where}: {loc}: {msg}") from None
