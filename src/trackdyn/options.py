@@ -20,6 +20,7 @@ nonlinear = false      # true: the bicubic track of 5.14 (single-wheel contacts)
 from __future__ import annotations
 
 from pathlib import Path
+
 from pydantic import (
     BaseModel,
     ConfigDict,
@@ -31,6 +32,7 @@ from pydantic import (
 )
 
 from trackdyn.errors import TrackdynInputError
+
 
 class Strict(BaseModel):
     """Base of scenario tables: unknown keys are refused, values are frozen."""
