@@ -6,6 +6,14 @@ D3 (70-150 m); quality is assessed from its standard deviation over fixed-length
 backward, so the magnitude is ``|H|^2`` and there is no phase shift); it is not the
 standard's reference filter, so values for wavelengths near the band edges can differ from
 those of a recording car.
+
+References
+----------
+EN 13848-1:2019. Railway applications - Track - Track geometry quality - Part 1:
+Characterisation of track geometry. CEN, Brussels.
+
+EN 13848-5:2017. Railway applications - Track - Track geometry quality - Part 5: Geometric
+quality levels - Plain line, switches and crossings. CEN, Brussels.
 """
 
 from __future__ import annotations

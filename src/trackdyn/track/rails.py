@@ -1,8 +1,16 @@
 """Rail sections: bending stiffness EI about the horizontal axis.
 
-Second moments of area from ``data.md``: 60E1 and 54E1 from EN 13674-1 profile data; 136RE
-from AREMA profile figures (94.9 in^4). Young's modulus of rail steel 210 GPa (EN 13674-1
-gives 210 GPa; 207 GPa is also quoted, a 1.4 % difference).
+Second moments of area: 60E1 and 54E1 from EN 13674-1 profile data; 136RE from AREMA
+profile figures (94.9 in^4). Young's modulus of rail steel 210 GPa (EN 13674-1 gives
+210 GPa; 207 GPa is also quoted, a 1.4 % difference).
+
+References
+----------
+EN 13674-1:2011+A1:2017. Railway applications - Track - Rail - Part 1: Vignole railway
+rails 46 kg/m and above. CEN, Brussels.
+
+AREMA (2023). Manual for Railway Engineering, Chapter 4: Rail. American Railway
+Engineering and Maintenance-of-Way Association, Lanham, MD.
 """
 
 from __future__ import annotations

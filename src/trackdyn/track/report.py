@@ -1,4 +1,13 @@
-"""The track job: everything `trackdyn track` computes, as one xarray Dataset."""
+"""The track job: everything `trackdyn track` computes, as one xarray Dataset.
+
+Loaded profile and linearised stiffness (seed §5.2), D1/D2 longitudinal level quality, and
+the deflection basin over a voided sleeper (the situation of the seed's Fig 5.2).
+
+References
+----------
+Fröhling, R.D. (1997). Deterioration of railway track due to dynamic vehicle loading
+and spatially varying track stiffness. PhD thesis, University of Pretoria, §5.1-5.2.
+"""
 
 from __future__ import annotations
 

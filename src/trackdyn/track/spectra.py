@@ -11,6 +11,18 @@ over 0 < Omega < inf), in m^2/(rad/m), all of the form
   dynamics literature, e.g. Garg & Dukkipati 1984): ``k = 0.25``, ``Oc = 0.8245`` rad/m,
   ``Or = 0``, ``A_v`` = 1.2107, 1.0181, 0.6816, 0.5376, 0.2095, 0.0339 cm^2 rad/m for
   ``fra1``..``fra6``; stated validity 1.524-304.8 m wavelength.
+
+References
+----------
+Garg, V.K. & Dukkipati, R.V. (1984). Dynamics of Railway Vehicle Systems. Academic Press,
+Toronto (FRA track class spectra).
+
+ORE Question B176 (1989). Bogies with steered or steering wheelsets, Report No. 1:
+Specifications and preliminary studies. Office for Research and Experiments of the
+International Union of Railways, Utrecht (German low/high disturbance spectra).
+
+Welch, P.D. (1967). The use of fast Fourier transform for the estimation of power spectra.
+IEEE Transactions on Audio and Electroacoustics 15(2), 70-73.
 """
 
 from __future__ import annotations

@@ -3,6 +3,13 @@
 All functions take and return SI units. Eq 5.6 is used in its corrected form
 ``L_c = (4 EI / u)^(1/4)`` (the printed ``k`` is a misprint: only ``u`` makes 5.5, 5.7 and
 5.8 consistent, since then ``k = P / y(0) = 2 u L_c``).
+
+References
+----------
+Fröhling, R.D. (1997). Deterioration of railway track due to dynamic vehicle loading
+and spatially varying track stiffness. PhD thesis, University of Pretoria, §5.1, eqs 5.1-5.8.
+
+Hetényi, M. (1946). Beams on Elastic Foundation. University of Michigan Press, Ann Arbor.
 """
 
 from __future__ import annotations
