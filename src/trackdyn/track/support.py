@@ -49,11 +49,12 @@ class SupportCurve:
         object.__setattr__(self, "deflection", defl)
         if load.ndim != 1 or load.shape != defl.shape or load.size < 2:
             raise TrackdynInputError(f"{self.where}: needs at least two (load, deflection) points")
-        if not (np.all(np.isfinite(load)) and np.all(np.isfinite(defl))):
+        # ndarray methods, not np.all/np.diff: thousands of curves are checked on reading
+        if not (np.isfinite(load).all() and np.isfinite(defl).all()):
             raise TrackdynInputError(f"{self.where}: NaN or infinite load or deflection")
         if load[0] < 0:
             raise TrackdynInputError(f"{self.where}: negative load {load[0]:g} N")
-        if np.any(np.diff(load) <= 0) or np.any(np.diff(defl) <= 0):
+        if (load[1:] <= load[:-1]).any() or (defl[1:] <= defl[:-1]).any():
             raise TrackdynInputError(
                 f"{self.where}: load-deflection curve is not monotonic "
                 "(load and deflection must both increase; zero or negative stiffness)"
