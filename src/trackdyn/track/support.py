@@ -2,7 +2,13 @@
 
 A support curve is the wheel load on the rail above one sleeper against the rail
 deflection there (positive downward), as a track loading vehicle measures it. Eqs 5.9-5.11
-turn it into an effective linearised loaded stiffness ``k2`` and a static deflection ``ys``.
+turn it into an effective linearised loaded stiffness ``k2`` and a static deflection ``ys``,
+for all sleepers of a track in one array pass.
+
+References
+----------
+Fröhling, R.D. (1997). Deterioration of railway track due to dynamic vehicle loading and
+spatially varying track stiffness. PhD thesis, University of Pretoria.
 """
 
 from __future__ import annotations
@@ -10,9 +16,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.interpolate import CubicSpline, PchipInterpolator
 
 from trackdyn.errors import TrackdynInputError
+from trackdyn.track.interpolation import METHODS, evaluate, knot_slopes
 
 LINEAR_CURVE_MAX_LOAD = 2.0e6
 """Top of the curve built for a linear support [N]; far above any wheel load."""
@@ -43,11 +49,12 @@ class SupportCurve:
         object.__setattr__(self, "deflection", defl)
         if load.ndim != 1 or load.shape != defl.shape or load.size < 2:
             raise TrackdynInputError(f"{self.where}: needs at least two (load, deflection) points")
-        if not (np.all(np.isfinite(load)) and np.all(np.isfinite(defl))):
+        # ndarray methods, not np.all/np.diff: thousands of curves are checked on reading
+        if not (np.isfinite(load).all() and np.isfinite(defl).all()):
             raise TrackdynInputError(f"{self.where}: NaN or infinite load or deflection")
         if load[0] < 0:
             raise TrackdynInputError(f"{self.where}: negative load {load[0]:g} N")
-        if np.any(np.diff(load) <= 0) or np.any(np.diff(defl) <= 0):
+        if (load[1:] <= load[:-1]).any() or (defl[1:] <= defl[:-1]).any():
             raise TrackdynInputError(
                 f"{self.where}: load-deflection curve is not monotonic "
                 "(load and deflection must both increase; zero or negative stiffness)"
@@ -77,48 +84,90 @@ class SupportCurve:
             default: a load outside the curve is refused.
         """
         p = np.asarray(load, dtype=float)
+        if not extrapolate:
+            self.check_covers(p)
+        return CurveStack((self,)).deflection_at(p.reshape(1, -1), method).reshape(p.shape)
+
+    def check_covers(self, load: np.ndarray) -> None:
+        """Refuse wheel loads [N] outside the measured curve."""
         lo, hi = self.load[0], self.load[-1]
-        outside = (p < lo) | (p > hi)
-        if np.any(outside) and not extrapolate:
-            bad = p[outside].flat[0]
+        outside = (load < lo) | (load > hi)
+        if np.any(outside):
+            bad = load[outside].flat[0]
             raise TrackdynInputError(
                 f"{self.where}: load {bad / 1e3:.1f} kN is outside the measured curve "
                 f"({lo / 1e3:.1f}-{hi / 1e3:.1f} kN); extend the curve or allow extrapolation"
             )
-        if method == "cubic":
-            spline = CubicSpline(self.load, self.deflection, bc_type="not-a-knot")
-        elif method == "pchip":
-            spline = PchipInterpolator(self.load, self.deflection)
-        else:
+
+
+class CurveStack:
+    """Support curves stacked by number of points, to interpolate all in one array pass.
+
+    Parameters
+    ----------
+    curves : sequence of SupportCurve
+        The curves, in the order of the rows of every result.
+
+    Attributes
+    ----------
+    groups : list of tuple
+        ``(rows, load, deflection)`` per number of points: the curves' indices and their
+        loads [N] and deflections [m] as 2-D arrays, a row a curve.
+    lo, hi : ndarray
+        First and last measured load of each curve [N].
+    """
+
+    def __init__(self, curves):
+        self.curves = tuple(curves)
+        sizes = np.fromiter((c.load.size for c in self.curves), int, len(self.curves))
+        self.groups = []
+        self.lo, self.hi = np.empty(sizes.size), np.empty(sizes.size)
+        for n in np.unique(sizes):
+            rows = np.flatnonzero(sizes == n)
+            load = np.array([self.curves[i].load for i in rows])
+            defl = np.array([self.curves[i].deflection for i in rows])
+            self.groups.append((rows, load, defl))
+            self.lo[rows], self.hi[rows] = load[:, 0], load[:, -1]
+
+    def deflection_at(self, load: np.ndarray, method: str = "cubic") -> np.ndarray:
+        """Deflection [m] of each curve at its own wheel loads, linear beyond the curve.
+
+        Parameters
+        ----------
+        load : ndarray
+            Wheel loads [N], shape (curves, k).
+        method : {"cubic", "pchip"}
+            Interpolation, see `SupportCurve.deflection_at`.
+        """
+        if method not in METHODS:
             raise TrackdynInputError(f"unknown interpolation method {method!r}; use cubic or pchip")
-        inside = np.clip(p, lo, hi)
-        y = spline(inside)
-        slope_lo, slope_hi = spline(lo, 1), spline(hi, 1)
-        return np.where(
-            p < lo, y + (p - lo) * slope_lo, np.where(p > hi, y + (p - hi) * slope_hi, y)
-        )
+        out = np.empty(load.shape)
+        for rows, x, y in self.groups:
+            out[rows] = evaluate(x, y, knot_slopes(x, y, method), load[rows])
+        return out
 
 
-def secant_linearisation(
-    curve: SupportCurve,
+def linearise_curves(
+    curves,
     static_load: float,
     delta: float = 0.3,
     *,
     method: str = "cubic",
     extrapolate: bool = False,
     printed_5_10: bool = False,
-) -> tuple[float, float]:
+) -> tuple[np.ndarray, np.ndarray]:
     """Effective linearised loaded stiffness and static deflection (eqs 5.9-5.11).
 
     ``ΔP = δ Ps`` (5.9); ``ys1, ys2`` are the deflections at ``Ps ∓ ΔP``;
     ``k2 = 2ΔP / (ys2 - ys1)`` (5.10, secant form: the default, because it is the slope of
     the line through the two points, equal to ``k`` for a linear support);
-    ``ys = (ys1 + ys2) / 2`` (5.11).
+    ``ys = (ys1 + ys2) / 2`` (5.11). All curves in one array pass; a bad curve is reported
+    as it would be curve by curve, the first one in ``curves``.
 
     Parameters
     ----------
-    curve : SupportCurve
-        Measured curve of the sleeper.
+    curves : sequence of SupportCurve
+        Measured curves, one per sleeper.
     static_load : float
         Static wheel load Ps [N].
     delta : float
@@ -133,23 +182,49 @@ def secant_linearisation(
 
     Returns
     -------
-    k2 : float
-        Effective linearised loaded track stiffness [N/m].
-    ys : float
-        Static track deflection [m].
+    k2 : ndarray
+        Effective linearised loaded track stiffness per curve [N/m].
+    ys : ndarray
+        Static track deflection per curve [m].
     """
     if not np.isfinite(static_load) or static_load <= 0:
         raise TrackdynInputError(f"static wheel load must be > 0, got {static_load!r} N")
     if not np.isfinite(delta) or not 0 < delta < 1:
         raise TrackdynInputError(f"dynamic increment delta must be in (0, 1), got {delta!r}")
+    stack = CurveStack(curves)
     dp = delta * static_load
-    ys1, ys2 = curve.deflection_at(
-        [static_load - dp, static_load + dp], method=method, extrapolate=extrapolate
-    )
-    if ys2 <= ys1:
+    p = np.array([static_load - dp, static_load + dp])
+    ys1, ys2 = stack.deflection_at(np.broadcast_to(p, (len(stack.curves), 2)), method).T
+    bad = ys2 <= ys1
+    if not extrapolate:
+        bad |= (p[0] < stack.lo) | (p[1] > stack.hi)
+    if np.any(bad):
+        curve = stack.curves[np.argmax(bad)]
+        if not extrapolate:
+            curve.check_covers(p)
         raise TrackdynInputError(
             f"{curve.where}: interpolated curve is not increasing over Ps ± ΔP; "
             "use method='pchip' for noisy curves"
         )
     numerator = static_load if printed_5_10 else 2.0 * dp
     return numerator / (ys2 - ys1), 0.5 * (ys1 + ys2)
+
+
+def secant_linearisation(
+    curve: SupportCurve, static_load: float, delta: float = 0.3, **options
+) -> tuple[float, float]:
+    """`linearise_curves` for one curve: ``k2`` [N/m] and ``ys`` [m] as floats.
+
+    Parameters
+    ----------
+    curve : SupportCurve
+        Measured curve of the sleeper.
+    static_load : float
+        Static wheel load Ps [N].
+    delta : float
+        Dynamic wheel load increment δ [-].
+    **options
+        ``method``, ``extrapolate``, ``printed_5_10`` of `linearise_curves`.
+    """
+    k2, ys = linearise_curves((curve,), static_load, delta, **options)
+    return float(k2[0]), float(ys[0])

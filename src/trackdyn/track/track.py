@@ -1,4 +1,10 @@
-"""Track data (geometry per rail, support curves per sleeper) and its linearisation (§5.2)."""
+"""Track data (geometry per rail, support curves per sleeper) and its linearisation (§5.2).
+
+References
+----------
+Fröhling, R.D. (1997). Deterioration of railway track due to dynamic vehicle loading and
+spatially varying track stiffness. PhD thesis, University of Pretoria.
+"""
 
 from __future__ import annotations
 
@@ -9,7 +15,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from trackdyn.errors import TrackdynInputError, check_series
-from trackdyn.track.support import SupportCurve, secant_linearisation
+from trackdyn.track.support import CurveStack, SupportCurve, linearise_curves
 from trackdyn.track.winkler import modulus_from_stiffness
 
 RAILS = ("left", "right")
@@ -137,14 +143,12 @@ class Track:
         delta : float
             Dynamic wheel load increment δ [-].
         **options
-            Passed to `secant_linearisation` (``method``, ``extrapolate``, ``printed_5_10``).
+            Passed to `linearise_curves` (``method``, ``extrapolate``, ``printed_5_10``).
         """
-        k2 = np.empty((2, self.supports.position.size))
-        ys = np.empty_like(k2)
-        for r, rail in enumerate(RAILS):
-            for i, curve in enumerate(getattr(self.supports, rail)):
-                k2[r, i], ys[r, i] = secant_linearisation(curve, static_load, delta, **options)
-        return LinearisedTrack(self, static_load, delta, k2, ys)
+        curves = self.supports.left + self.supports.right
+        k2, ys = linearise_curves(curves, static_load, delta, **options)
+        shape = (len(RAILS), self.supports.position.size)
+        return LinearisedTrack(self, static_load, delta, k2.reshape(shape), ys.reshape(shape))
 
 
 @dataclass(frozen=True)
@@ -228,15 +232,15 @@ def load_surface(track: Track, rail: str, deflection_grid: np.ndarray):
     """
     from scipy.interpolate import RectBivariateSpline
 
-    curves = getattr(track.supports, rail)
-    loads = np.empty((len(curves), deflection_grid.size))
-    for i, curve in enumerate(curves):
-        p = np.linspace(curve.load[0], curve.load[-1], 200)
-        y = curve.deflection_at(p, method="pchip")
-        slope = (p[-1] - p[-2]) / (y[-1] - y[-2])
-        loads[i] = np.interp(deflection_grid, y, p, left=0.0, right=np.nan)
-        beyond = deflection_grid > y[-1]
-        loads[i, beyond] = p[-1] + slope * (deflection_grid[beyond] - y[-1])
+    stack = CurveStack(getattr(track.supports, rail))
+    p = np.linspace(stack.lo, stack.hi, 200, axis=1)
+    y = stack.deflection_at(p, method="pchip")
+    loads = np.array(
+        [np.interp(deflection_grid, yi, pi, left=0.0) for yi, pi in zip(y, p, strict=True)]
+    )
+    slope = (p[:, -1:] - p[:, -2:-1]) / (y[:, -1:] - y[:, -2:-1])
+    beyond = deflection_grid > y[:, -1:]
+    loads[beyond] = (p[:, -1:] + slope * (deflection_grid - y[:, -1:]))[beyond]
     spline = RectBivariateSpline(track.supports.position, deflection_grid, loads, kx=3, ky=3)
 
     def surface(x):
