@@ -1,6 +1,7 @@
 """The command line: outputs of each command, and bad input refused with exit code 2."""
 
 import numpy as np
+import pandas as pd
 import pytest
 import xarray as xr
 from typer.testing import CliRunner
@@ -83,7 +84,20 @@ def test_run_command_with_scenario(short_track, tmp_path):
     }
     ds = xr.load_dataset(out / "results.nc")
     assert list(ds.contact.values) == ["FL", "FR", "BL", "BR"]
-    assert ds.attrs["model"] == "7dof"
+    assert ds.attrs["model"] == "7dof" and ds.attrs["vehicle"].startswith("empty")
+    # 40 km/h and every 4th step stored, as the scenario says
+    assert ds.attrs["speed_m_per_s"] == pytest.approx(40 / 3.6, rel=1e-12)
+    step = float(ds.time[1] - ds.time[0])
+    assert step == pytest.approx(4 * ds.attrs["time_step_s"], rel=1e-9)
+    # summary.csv holds the statistics of the written wheel loads, recomputed here
+    table = pd.read_csv(out / "summary.csv").set_index("contact")
+    dyn = (ds.wheel_load - ds.attrs["static_wheel_load_N"]) / 1e3
+    for c in ds.contact.values:
+        x = dyn.sel(contact=c).values
+        assert table.loc[c, "dyn_load_sd_kN"] == pytest.approx(x.std(), rel=1e-3)  # %.4g
+        assert table.loc[c, "dyn_load_max_kN"] == pytest.approx(x.max(), rel=1e-3)
+    secondary = float(np.abs(ds.secondary_displacement).max()) * 1e3
+    assert table["secondary_max_mm"].iloc[0] == pytest.approx(secondary, rel=1e-3)
 
 
 BAD_SCENARIOS = [
