@@ -45,7 +45,7 @@ def test_track_command_on_user_files(short_track, tmp_path):
         ],
     )
     assert result.exit_code == 0, result.output
-    names = {p.name for p in out.iterdir()}
+    names = {p.name for p in out.iterdir()} - {".trackdyn.json"}
     assert names == {
         "track.nc",
         "track_overview.png",
@@ -75,7 +75,7 @@ def test_run_command_with_scenario(short_track, tmp_path):
     out = tmp_path / "out"
     result = runner.invoke(app, ["run", str(scenario), "--out", str(out)])
     assert result.exit_code == 0, result.output
-    assert {p.name for p in out.iterdir()} == {
+    assert {p.name for p in out.iterdir()} - {".trackdyn.json"} == {
         "results.nc",
         "summary.csv",
         "wheel_loads.png",
@@ -124,7 +124,7 @@ def test_run_refuses_bad_scenarios(tmp_path, text, message):
     assert result.exit_code == 2, result.output
     assert message in result.stderr
     assert len(result.stderr.strip().splitlines()) == 1  # one line, no traceback
-    assert not out.exists() or not any(out.iterdir())  # nothing written
+    assert not out.exists()  # nothing written
 
 
 def test_short_track_refused(tmp_path):
@@ -152,7 +152,7 @@ def test_track_refuses_bad_options(tmp_path, args, message):
     result = runner.invoke(app, ["track", *args, "--out", str(out)])
     assert result.exit_code == 2, result.output
     assert message in result.stderr
-    assert not out.exists() or not any(out.iterdir())
+    assert not out.exists()
 
 
 def test_track_refuses_bad_file(tmp_path, short_track):

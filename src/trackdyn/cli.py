@@ -13,7 +13,8 @@ from rich.table import Table
 
 from trackdyn import __version__
 from trackdyn.errors import TrackdynInputError
-from trackdyn.io import staged_output, write_netcdf
+from trackdyn.io import write_netcdf
+from trackdyn.output import handle_interrupts, output_folder
 
 app = typer.Typer(
     add_completion=False,
@@ -23,6 +24,9 @@ app = typer.Typer(
 )
 console = Console()
 OutOption = Annotated[Path, typer.Option("--out", help="Output folder.")]
+OverwriteOption = Annotated[
+    bool, typer.Option(help="Replace another command's outputs in the output folder.")
+]
 
 
 def refuse_bad_input(command):
@@ -62,6 +66,7 @@ def main(
     ] = False,
 ):
     """Railway vehicle/track vertical dynamics and track deterioration prediction."""
+    handle_interrupts()
 
 
 @app.command()
@@ -81,6 +86,7 @@ def track(
         bool, typer.Option(help="Allow Ps ± ΔP beyond the measured curves.")
     ] = False,
     out: OutOption = Path("trackdyn-out"),
+    overwrite: OverwriteOption = False,
 ):
     """Analyse a track section: loaded profile, linearised stiffness, geometry quality.
 
@@ -95,9 +101,9 @@ def track(
     if (geometry is None) != (supports is None):
         raise TrackdynInputError("give both --geometry and --supports, or neither for the example")
     section = rail_section(rail)
-    trk = load_track(geometry, supports)
-    lin = trk.linearise(wheel_load_kN * 1e3, delta, extrapolate=extrapolate)
-    with staged_output(out) as stage:
+    with output_folder(out, "track", overwrite) as stage:
+        trk = load_track(geometry, supports)
+        lin = trk.linearise(wheel_load_kN * 1e3, delta, extrapolate=extrapolate)
         table = write_track_outputs(lin, section, stage)
     _show(table, f"Track summary ({trk.geometry.where})")
     console.print(f"wrote track.nc and 3 figures to {out}")
@@ -110,6 +116,7 @@ def run(
         Path | None, typer.Argument(help="Scenario TOML; default: the built-in example.")
     ] = None,
     out: OutOption = Path("trackdyn-out"),
+    overwrite: OverwriteOption = False,
 ):
     """Simulate a vehicle over a track and write results.nc, summary.csv and figures.
 
@@ -122,10 +129,10 @@ def run(
 
     spec, base = load_scenario(scenario)
     vehicle = spec.vehicle.load(base)
-    trk = spec.track.load(base)
-    ds = simulate(vehicle, trk, spec.run, progress=True)
-    table = summary(ds)
-    with staged_output(out) as stage:
+    with output_folder(out, "run", overwrite) as stage:
+        trk = spec.track.load(base)
+        ds = simulate(vehicle, trk, spec.run, progress=True)
+        table = summary(ds)
         write_netcdf(ds, stage / "results.nc")
         table.to_csv(stage / "summary.csv", index=False, float_format="%.4g")
         plots.wheel_loads(ds, stage / "wheel_loads.png")
@@ -143,6 +150,7 @@ def study(
         typer.Argument(help="Study TOML; default: the 2-DOF scenario matrix of §5.4.1."),
     ] = None,
     out: OutOption = Path("trackdyn-out"),
+    overwrite: OverwriteOption = False,
     workers: Annotated[
         int | None, typer.Option(help="Worker processes (default: one per core; 1: serial).")
     ] = None,
@@ -158,10 +166,10 @@ def study(
 
     spec, base = load_study(study_file)
     runs = tasks(spec, base)
-    results = run_tasks(runs, run_task, workers=workers, scheduler=scheduler, progress=True)
-    table, ds = gather(results)
-    ds.attrs.update(kind=spec.kind, model=spec.run.model)
-    with staged_output(out) as stage:
+    with output_folder(out, "study", overwrite) as stage:
+        results = run_tasks(runs, run_task, workers=workers, scheduler=scheduler, progress=True)
+        table, ds = gather(results)
+        ds.attrs.update(kind=spec.kind, model=spec.run.model)
         write_study(table, ds, spec, stage)
     _show(table.drop(columns="error"), f"{spec.kind} study, {spec.run.model}: {len(runs)} runs")
     for _, row in table[table["error"] != ""].iterrows():
@@ -178,6 +186,7 @@ def deteriorate(
         typer.Argument(help="Deterioration scenario TOML; default: the built-in example."),
     ] = None,
     out: OutOption = Path("trackdyn-out"),
+    overwrite: OverwriteOption = False,
     workers: Annotated[
         int | None,
         typer.Option(help="Worker processes (default: one per core, 1 for one section)."),
@@ -204,8 +213,8 @@ def deteriorate(
     serial = scheduler is None and (workers == 1 or (workers is None and len(tasks) == 1))
     if serial:
         tasks = [dataclasses.replace(t, progress=True) for t in tasks]
-    datasets = run_sections(tasks, workers=workers, scheduler=scheduler, progress=not serial)
-    with staged_output(out) as stage:
+    with output_folder(out, "deteriorate", overwrite) as stage:
+        datasets = run_sections(tasks, workers=workers, scheduler=scheduler, progress=not serial)
         files = write_outputs(datasets, stage)
     table = summary(datasets)
     show = Table(title=f"Deterioration, {spec.run.model}: {len(datasets)} section(s)")

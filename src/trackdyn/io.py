@@ -9,10 +9,7 @@ or linear supports: ``distance_m,rail,stiffness_kN_per_mm``. ``rail`` is ``left`
 from __future__ import annotations
 
 import os
-import shutil
-import tempfile
 import tomllib
-from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -198,28 +195,6 @@ def atomic_write(path, write) -> None:
     finally:
         if tmp.exists():
             tmp.unlink()
-
-
-@contextmanager
-def staged_output(out):
-    """Yield a staging folder; its files move into ``out`` only if the block succeeds.
-
-    Parameters
-    ----------
-    out : str or Path
-        Output folder, created if missing.
-    """
-    out = Path(out)
-    if out.exists() and not out.is_dir():
-        raise TrackdynInputError(f"{out}: output path exists and is not a folder")
-    out.mkdir(parents=True, exist_ok=True)
-    stage = Path(tempfile.mkdtemp(prefix=".staging-", dir=out))
-    try:
-        yield stage
-        for item in stage.iterdir():
-            os.replace(item, out / item.name)
-    finally:
-        shutil.rmtree(stage, ignore_errors=True)
 
 
 def write_netcdf(ds, path) -> None:

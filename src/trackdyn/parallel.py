@@ -39,7 +39,9 @@ def _client(workers: int | None, scheduler: str | None):
             n_workers=workers or os.cpu_count() or 1,
             threads_per_worker=1,
             processes=True,
-            dashboard_address=None,
+            # the scheduler's HTTP server starts even without a dashboard; on a free port,
+            # so a second cluster on the machine (another study, a notebook) is no clash
+            dashboard_address=":0",
         )
     return Client(cluster), cluster
 

@@ -1,0 +1,35 @@
+"""``python -m trackdyn`` and the ``trackdyn`` command.
+
+Interrupts are handled before anything heavy is imported, and the process ends without
+the interpreter's slow shutdown (where Python gives SIGINT back its default action), so
+Ctrl-C ends the command with exit code 130 and no partial output at any moment
+(`trackdyn.output`).
+"""
+
+import os
+import sys
+
+
+def main():
+    """Run the command-line interface."""
+    from trackdyn.output import handle_interrupts
+
+    handle_interrupts()
+    from trackdyn.cli import app
+
+    try:
+        app(prog_name="trackdyn")
+        code = 0
+    except SystemExit as exc:
+        code = exc.code
+    if not isinstance(code, int):
+        if code is not None:
+            print(code, file=sys.stderr)
+        code = 0 if code is None else 1
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)
+
+
+if __name__ == "__main__":
+    main()

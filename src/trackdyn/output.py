@@ -1,0 +1,130 @@
+"""Output folders: checked before any work, filled as a whole or not at all.
+
+A command writes into a hidden staging folder inside its output folder; only when every
+file is written are they moved into place, replacing the files of the command's previous
+run there. A manifest (`MANIFEST`) names the command and its files, so a folder holding
+another command's outputs is refused unless ``overwrite`` is given.
+
+An interrupt (Ctrl-C, SIGTERM) ends the process at once with exit code 130: staging
+folders and output folders this process created are removed, child processes (local Dask
+workers) are killed. While files are being moved into place the interrupt waits for the
+move to finish (a few renames), so a folder never holds half of a run.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import tempfile
+from contextlib import contextmanager
+from pathlib import Path
+
+from trackdyn.errors import TrackdynInputError
+
+MANIFEST = ".trackdyn.json"
+"""File in an output folder naming the command that wrote it and its files."""
+
+EXIT_INTERRUPTED = 130
+"""Exit code after an interrupt (128 + SIGINT), as shells report it."""
+
+_cleanup: list[Path] = []  # staging folders and created output folders, newest last
+_state = {"committing": False, "pending": False}
+
+
+def _remove_and_exit() -> None:
+    for path in reversed(_cleanup):
+        shutil.rmtree(path, ignore_errors=True)
+    try:
+        import psutil
+
+        for child in psutil.Process().children(recursive=True):
+            child.kill()
+    except Exception:  # noqa: BLE001, S110 - exiting anyway; best effort
+        pass
+    os._exit(EXIT_INTERRUPTED)
+
+
+def _on_interrupt(signum, frame) -> None:
+    if _state["committing"]:
+        _state["pending"] = True
+        return
+    _remove_and_exit()
+
+
+def handle_interrupts() -> None:
+    """End the process on SIGINT/SIGTERM with exit code 130 and no partial outputs."""
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, _on_interrupt)
+
+
+def _manifest(out: Path) -> dict:
+    try:
+        data = json.loads((out / MANIFEST).read_text())
+    except (OSError, ValueError):
+        return {}
+    return data if isinstance(data, dict) else {}
+
+
+@contextmanager
+def output_folder(out, command: str, overwrite: bool = False):
+    """Yield a staging folder; on success its files replace the command's files in ``out``.
+
+    Parameters
+    ----------
+    out : str or Path
+        Output folder, created if missing.
+    command : str
+        The command writing it (``run``, ``study``, ...), recorded in the manifest.
+    overwrite : bool
+        Replace the outputs of another command found in ``out``.
+    """
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise TrackdynInputError(f"--out {out}: exists and is not a folder")
+    previous = _manifest(out) if out.is_dir() else {}
+    other = previous.get("command")
+    if other and other != command and not overwrite:
+        raise TrackdynInputError(
+            f"--out {out}: holds the outputs of 'trackdyn {other}'; choose another folder "
+            "or give --overwrite"
+        )
+    created = not out.exists()
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        stage = Path(tempfile.mkdtemp(prefix=".staging-", dir=out))
+    except OSError as exc:
+        raise TrackdynInputError(f"--out {out}: cannot write there ({exc.strerror})") from None
+    if created:
+        _cleanup.append(out)
+    _cleanup.append(stage)
+    try:
+        yield stage
+        _commit(out, stage, command, previous)
+    except BaseException:
+        shutil.rmtree(stage, ignore_errors=True)
+        if created:
+            shutil.rmtree(out, ignore_errors=True)
+        raise
+    finally:
+        _cleanup[:] = [p for p in _cleanup if p not in (out, stage)]
+
+
+def _commit(out: Path, stage: Path, command: str, previous: dict) -> None:
+    """Move the staged files into ``out``, replacing the previous run's; interrupts wait."""
+    names = sorted(p.name for p in stage.iterdir())
+    _state["committing"] = True
+    try:
+        for name in previous.get("files", []):
+            if name not in names and (out / name).is_file() and "/" not in name:
+                (out / name).unlink()
+        for name in names:
+            os.replace(stage / name, out / name)
+        (stage / MANIFEST).write_text(json.dumps({"command": command, "files": names}))
+        os.replace(stage / MANIFEST, out / MANIFEST)
+        stage.rmdir()
+    finally:
+        _state["committing"] = False
+    if _state["pending"]:
+        _remove_and_exit()

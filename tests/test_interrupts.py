@@ -1,0 +1,77 @@
+"""Ctrl-C at any moment: the process ends within seconds, exit 130, no output left.
+
+Each command runs as a real subprocess and gets SIGINT at moments spread over its run
+(measured first, uninterrupted, in the same test): while importing and computing, while
+writing and while moving the files into place. A signal that arrives after the command has
+finished finds it gone (exit 0, every file there).
+"""
+
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+GRACE = 3.0  # [s] allowed between the signal and the end of the process
+FRACTIONS = (0.15, 0.5, 0.85, 0.97)  # of the uninterrupted run's wall time
+
+STUDY = """kind = "speed"
+[run]
+model = "2dof"
+[speed]
+speeds_kmh = [40, 60, 80]
+"""
+DETERIORATE = """[run]
+model = "7dof"
+[loop]
+total_mgt = 1
+snapshot_every_mgt = 0.5
+"""
+
+
+def command(kind, tmp_path):
+    if kind == "run":
+        return ["run"]
+    text = STUDY if kind == "study" else DETERIORATE
+    (tmp_path / f"{kind}.toml").write_text(text)
+    extra = ["--workers", "2"] if kind == "study" else []
+    return [kind, str(tmp_path / f"{kind}.toml"), *extra]
+
+
+def start(args, out):
+    return subprocess.Popen(
+        [sys.executable, "-m", "trackdyn", *args, "--out", str(out)],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+    )
+
+
+@pytest.mark.parametrize("kind", ["run", "study", "deteriorate"])
+def test_interrupt_at_any_moment_leaves_nothing(tmp_path, kind):
+    args = command(kind, tmp_path)
+    t0 = time.perf_counter()
+    whole = start(args, tmp_path / "whole")
+    assert whole.wait(timeout=600) == 0, whole.stderr.read().decode()
+    whole.stderr.close()
+    duration = time.perf_counter() - t0
+    expected = {p.name for p in (tmp_path / "whole").iterdir()}
+    for i, fraction in enumerate(FRACTIONS):
+        out = tmp_path / f"out{i}"
+        proc = start(args, out)
+        time.sleep(fraction * duration)
+        proc.send_signal(signal.SIGINT)
+        sent = time.perf_counter()
+        try:
+            code = proc.wait(timeout=GRACE + 10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            pytest.fail(f"{kind}: still running 10 s after SIGINT at {fraction:.0%} of the run")
+        finally:
+            proc.stderr.close()
+        assert time.perf_counter() - sent < GRACE, f"{kind}: slow to stop at {fraction:.0%}"
+        if code == 0:  # finished before the signal came
+            assert {p.name for p in out.iterdir()} == expected
+        else:
+            assert code == 130, f"{kind}: exit {code} at {fraction:.0%}"
+            assert not out.exists(), f"{kind}: {sorted(p.name for p in out.rglob('*'))}"
