@@ -101,6 +101,9 @@ def test_run_command_with_scenario(short_track, tmp_path):
 
 
 BAD_SCENARIOS = [
+    ("[run]\nspeed_kmh = 1e6\n", "run.speed_kmh: Input should be less than or equal to 400"),
+    ('[run]\nspeed_kmh = "60"\n', "run.speed_kmh: Input should be a valid number"),
+    ("[run]\ndt_s = 0.1\n", "bad.toml: time step dt_s = 0.1 s is beyond the stability limit"),
     ("[vehicle]\noverrides = { muu = 0.3 }\n", "unknown vehicle parameter 'muu'"),
     ("[vehicle]\noverrides = { mu = 0.9 }\n", "locks the wedge"),
     ("[vehicle]\noverrides = { k1 = -5.0 }\n", "k1 must be > 0"),
@@ -172,3 +175,41 @@ def test_track_refuses_bad_file(tmp_path, short_track):
     )
     assert result.exit_code == 2
     assert "geometry.csv" in result.stderr and "line 3" in result.stderr
+
+
+def test_study_refuses_empty_speeds_and_a_bad_scheduler(tmp_path):
+    study = tmp_path / "speed.toml"
+    study.write_text('kind = "speed"\n[speed]\nspeeds_kmh = []\n')
+    result = runner.invoke(app, ["study", str(study), "--out", str(tmp_path / "a")])
+    assert (
+        result.exit_code == 2 and "speed.speeds_kmh: List should have at least 1" in result.stderr
+    )
+    result = runner.invoke(app, ["study", "--scheduler", "garbage", "--out", str(tmp_path / "b")])
+    assert result.exit_code == 2
+    assert "--scheduler 'garbage' is not an address like tcp://HOST:PORT" in result.stderr
+    assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
+
+
+def test_unwritable_output_folder_is_refused_before_any_work(tmp_path):
+    blocker = tmp_path / "file.txt"
+    blocker.write_text("")
+    result = runner.invoke(app, ["run", "--out", str(blocker / "sub")])
+    assert result.exit_code == 2 and "cannot write there" in result.stderr
+    assert "results" not in result.stdout  # refused before simulating
+
+
+def test_output_folder_belongs_to_one_command(tmp_path, short_track):
+    out = tmp_path / "out"
+    files = ["--geometry", str(short_track / "geometry.csv"), "--supports"]
+    track = ["track", *files, str(short_track / "supports.csv"), "--out", str(out)]
+    assert runner.invoke(app, track).exit_code == 0
+    (out / "notes.txt").write_text("mine")  # a user's own file stays
+    study = tmp_path / "speed.toml"
+    study.write_text('kind = "speed"\n[run]\nmodel = "2dof"\n[speed]\nspeeds_kmh = [40]\n')
+    result = runner.invoke(app, ["study", str(study), "--workers", "1", "--out", str(out)])
+    assert result.exit_code == 2 and "holds the outputs of 'trackdyn track'" in result.stderr
+    assert (out / "track.nc").exists()
+    args = ["study", str(study), "--workers", "1", "--out", str(out), "--overwrite"]
+    assert runner.invoke(app, args).exit_code == 0
+    names = {p.name for p in out.iterdir()}
+    assert "track.nc" not in names and {"study.csv", "notes.txt"} <= names

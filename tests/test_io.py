@@ -65,6 +65,9 @@ def test_round_trip(tmp_path):
         ("distance_m,left_mm\n0,1\n1,1\n", "no column right_"),
         ("distance_m,left_inch,right_mm\n0,1,1\n1,1,1\n", "unit 'inch'.*does not parse"),
         ("distance_m,left_mm,right_mm\n0,1,1\n1,abc,1\n", r"'left_mm'.*line 3"),
+        # limits.MAX_PROFILE: ±1 m
+        ("distance_m,left_mm,right_mm\n0,1,1\n1,1e300,1\n", r"left profile at row 1 is 1e\+300 mm"),
+        ("distance_m,left_mm,right_mm\n0,1,1\n1,1,-1001\n", "outside the plausible -1000 to 1000"),
     ],
 )
 def test_bad_geometry(tmp_path, text, match):
@@ -92,11 +95,20 @@ def test_bad_geometry(tmp_path, text, match):
         ),
         (
             "distance_m,rail,stiffness_kN_per_mm\n0.3,left,-5\n0.3,right,90\n",
-            "stiffness must be > 0",
+            "stiffness is -5 kN/mm, outside the plausible 1 to 10000 kN/mm",
         ),
         (
             "distance_m,rail,stiffness_kN_per_mm\n0.3,left,0\n0.3,right,90\n",
-            "stiffness must be > 0",
+            "stiffness is 0 kN/mm",
+        ),
+        (  # limits.SUPPORT_STIFFNESS: at most 10 GN/m
+            "distance_m,rail,stiffness_N_per_m\n0.3,left,1e30\n0.3,right,90e6\n",
+            r"left rail at 0.3 m \(lines 2-2\): stiffness is 1e\+24 kN/mm",
+        ),
+        (  # a sleeper's block pasted twice
+            "distance_m,rail,load_kN,deflection_mm\n0.3,left,0,0\n0.3,left,100,1\n"
+            "0.3,left,0,0\n0.3,left,100,1\n0.3,right,0,0\n0.3,right,100,1\n",
+            r"left rail at 0.3 m \(lines 2-5\): this sleeper's curve starts again at line 4",
         ),
         (
             "distance_m,rail,stiffness_kN_per_mm\n0.9,left,80\n0.3,left,90\n0.3,right,90\n"

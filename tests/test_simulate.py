@@ -77,3 +77,10 @@ def test_nonlinear_track_with_a_pure_seating_gap():
     assert float(np.abs(ds.wheel_load - V.static_wheel_load).max()) < 1e-6 * V.static_wheel_load
     wheel = float(ds.displacement.sel(dof="wheel_bounce")[0])
     assert wheel == pytest.approx(1e-3 + V.static_wheel_load / 100e6, rel=1e-3)
+
+
+def test_load_track_refuses_non_paths():
+    from trackdyn import load_track
+
+    with pytest.raises(TrackdynInputError, match="geometry must be a file path .* got int"):
+        load_track(123, 456)

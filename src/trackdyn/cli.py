@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import sys
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated
 
@@ -41,6 +42,18 @@ def refuse_bad_input(command):
             raise typer.Exit(2) from None
 
     return wrapper
+
+
+@contextmanager
+def _named(source):
+    """Prefix a refusal with the scenario file it comes from (if it does not name it)."""
+    try:
+        yield
+    except TrackdynInputError as exc:
+        where = str(source) if source is not None else "built-in example"
+        if str(exc).startswith(where):
+            raise
+        raise TrackdynInputError(f"{where}: {exc}") from None
 
 
 def _show(table, title: str) -> None:
@@ -131,7 +144,8 @@ def run(
     vehicle = spec.vehicle.load(base)
     with output_folder(out, "run", overwrite) as stage:
         trk = spec.track.load(base)
-        ds = simulate(vehicle, trk, spec.run, progress=True)
+        with _named(scenario):
+            ds = simulate(vehicle, trk, spec.run, progress=True)
         table = summary(ds)
         write_netcdf(ds, stage / "results.nc")
         table.to_csv(stage / "summary.csv", index=False, float_format="%.4g")

@@ -134,6 +134,12 @@ def read_supports(path) -> Supports:
                     raise TrackdynInputError(f"{where}: one stiffness per sleeper expected")
                 curves.append(SupportCurve.linear(values[group[0]], where))
             else:
+                again = np.flatnonzero(load[group][1:] == load[group][0])
+                if again.size:
+                    raise TrackdynInputError(
+                        f"{where}: this sleeper's curve starts again at line "
+                        f"{group[again[0] + 1] + 2} (rows repeated?)"
+                    )
                 curves.append(SupportCurve(load[group], defl[group], where))
         per_rail[rail] = (positions, curves)
     pos_l, pos_r = per_rail["left"][0], per_rail["right"][0]

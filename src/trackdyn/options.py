@@ -32,6 +32,7 @@ from pydantic import (
 )
 
 from trackdyn.errors import TrackdynInputError
+from trackdyn.limits import MAX_SPEED_KMH
 
 
 class Strict(BaseModel):
@@ -48,7 +49,7 @@ class RunOptions(Strict):
     model : str
         Vehicle model, a key of `trackdyn.vehicle.models.MODELS`.
     speed_kmh : float
-        Vehicle speed [km/h].
+        Vehicle speed [km/h], up to `trackdyn.limits.MAX_SPEED_KMH`.
     dt_s : float, optional
         Time step [s]; default: `trackdyn.simulation.time_step`.
     store_every : int, optional
@@ -62,8 +63,10 @@ class RunOptions(Strict):
         track (models whose contacts each stand for one wheel).
     """
 
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
+
     model: str = "11dof"
-    speed_kmh: PositiveFloat = 60.0
+    speed_kmh: float = Field(60.0, gt=0, le=MAX_SPEED_KMH)
     dt_s: PositiveFloat | None = None
     store_every: PositiveInt | None = None
     delta: float = Field(0.3, gt=0, lt=1)

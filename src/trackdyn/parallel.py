@@ -20,6 +20,14 @@ def _client(workers: int | None, scheduler: str | None):
     from distributed import Client, LocalCluster
 
     if scheduler:
+        from distributed.comm.addressing import get_address_host_port
+
+        try:
+            get_address_host_port(scheduler)
+        except ValueError as exc:
+            raise TrackdynInputError(
+                f"--scheduler {scheduler!r} is not an address like tcp://HOST:PORT ({exc})"
+            ) from None
         try:
             return Client(scheduler, timeout="10s"), None
         except (OSError, TimeoutError) as exc:

@@ -6,6 +6,8 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from trackdyn.errors import TrackdynInputError
+
 BODY_MOTIONS = {"body_bounce": "m/s^2", "body_roll": "rad/s^2", "body_pitch": "rad/s^2"}
 
 
@@ -19,6 +21,13 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
     ``wedge_velocity`` [m/s]; ``displacement``, ``velocity`` and ``acceleration`` (time,
     dof); ``body_<motion>_acceleration`` [m/s^2 or rad/s^2].
     """
+    bad = ~np.isfinite(out["q"]).all(axis=1)
+    if bad.any():
+        t = float(time[np.argmax(bad)])
+        raise TrackdynInputError(
+            f"the run gave non-finite displacements from t = {t:.4f} s (vehicle centre at "
+            f"{float(centre[np.argmax(bad)]):.2f} m): check the time step and the input ranges"
+        )
     n_axles = np.array([len(a) for a in model.contact_axles], dtype=float)
     damping_force = (out["v"] @ model.Dc.T) * model.contact_damping
     wheel_load = model.static_wheel_load + (out["fc"] + damping_force) / n_axles

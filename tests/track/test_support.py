@@ -73,5 +73,5 @@ def test_static_load_must_be_positive(bad):
 
 
 def test_zero_stiffness_refused():
-    with pytest.raises(TrackdynInputError, match="stiffness must be > 0"):
+    with pytest.raises(TrackdynInputError, match="stiffness is 0 kN/mm, outside the plausible"):
         SupportCurve.linear(0.0)

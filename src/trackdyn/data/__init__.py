@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from importlib.resources import files
 from pathlib import Path
 
@@ -29,6 +30,11 @@ def load_track(geometry=None, supports=None) -> Track:
         Supports CSV, ``distance_m,rail,load_kN,deflection_mm`` or
         ``distance_m,rail,stiffness_kN_per_mm``.
     """
+    for name, value in (("geometry", geometry), ("supports", supports)):
+        if value is not None and not isinstance(value, str | os.PathLike):
+            raise TrackdynInputError(
+                f"load_track: {name} must be a file path (str or Path), got {type(value).__name__}"
+            )
     if (geometry is None) != (supports is None):
         raise TrackdynInputError(
             "give both a geometry and a supports file, or neither for the built-in example"

@@ -55,6 +55,7 @@ from pydantic import (
 
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import read_toml
+from trackdyn.limits import MAX_SPEED_KMH
 from trackdyn.options import RunOptions, Strict, parse, vehicle_source
 
 
@@ -64,7 +65,7 @@ class TrafficSpec(Strict):
 
     vehicle: str = "loaded"
     overrides: dict[str, float] = Field(default_factory=dict)
-    speed_kmh: PositiveFloat = 60.0
+    speed_kmh: float = Field(60.0, gt=0, le=MAX_SPEED_KMH)
     passages_per_mgt: NonNegativeFloat
     label: str | None = None
 

@@ -23,12 +23,13 @@ from __future__ import annotations
 import dataclasses
 import itertools
 from pathlib import Path
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import Field, PositiveFloat
 
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import read_toml
+from trackdyn.limits import MAX_SPEED_KMH
 from trackdyn.options import RunOptions, Strict, VehicleSpec, parse, vehicle_source
 from trackdyn.scenario import TrackSpec
 from trackdyn.studies.runner import Task, TrackRef
@@ -40,23 +41,25 @@ class MatrixSpec(Strict):
     """``[matrix]``: ``vehicles`` (presets or files), excitation ``cases``, ``damping``
     variants (factors on the vehicle's values)."""
 
-    vehicles: list[str] = ["empty", "loaded"]
-    cases: list[Literal[tuple(CASES)]] = list(CASES)
+    vehicles: list[str] = Field(["empty", "loaded"], min_length=1)
+    cases: list[Literal[tuple(CASES)]] = Field(list(CASES), min_length=1)
     damping: dict[str, dict[str, PositiveFloat]] = {"low": {}, "high": {"rho1": 4.0, "mu": 1.4}}
 
 
 class SensitivitySpec(Strict):
     """``[sensitivity]``: ``parameters``, ``factors`` on them, ``grid`` of every combination."""
 
-    parameters: list[str] = ["rho_p", "k1", "kp", "mu"]
-    factors: list[PositiveFloat] = [0.5, 0.75, 1.25, 1.5]
+    parameters: list[str] = Field(["rho_p", "k1", "kp", "mu"], min_length=1)
+    factors: list[PositiveFloat] = Field([0.5, 0.75, 1.25, 1.5], min_length=1)
     grid: bool = False
 
 
 class SpeedSpec(Strict):
     """``[speed]``: ``speeds_kmh`` [km/h]."""
 
-    speeds_kmh: list[PositiveFloat] = Field(default_factory=lambda: [20, 40, 60, 80])
+    speeds_kmh: list[Annotated[float, Field(gt=0, le=MAX_SPEED_KMH)]] = Field(
+        default_factory=lambda: [20.0, 40.0, 60.0, 80.0], min_length=1
+    )
 
 
 class Study(Strict):

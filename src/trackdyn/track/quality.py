@@ -60,7 +60,9 @@ def _band(band) -> tuple[str, float, float]:
     return f"{lo:g}-{hi:g} m", lo, hi
 
 
-def longitudinal_level(distance, profile, band="D1", *, order: int = 4) -> np.ndarray:
+def longitudinal_level(
+    distance, profile, band="D1", *, order: int = 4, where: str = ""
+) -> np.ndarray:
     """Longitudinal level: the vertical profile band-passed to one EN 13848 waveband.
 
     Zero-phase Butterworth band-pass (``scipy.signal.sosfiltfilt``) between spatial
@@ -81,26 +83,30 @@ def longitudinal_level(distance, profile, band="D1", *, order: int = 4) -> np.nd
         ``"D1"``, ``"D2"``, ``"D3"`` or (shortest, longest) wavelength [m].
     order : int
         Butterworth prototype order; the band-pass has twice as many poles [-].
+    where : str
+        Source of the profile (a file) named in error messages.
 
     Returns
     -------
     ndarray
         Longitudinal level at ``distance`` [m].
     """
-    x, z = check_series(distance, profile, min_points=3)
+    x, z = check_series(distance, profile, min_points=3, where=where)
+    at = f"{where}: " if where else ""
     label, lam_min, lam_max = _band(band)
     if isinstance(order, bool) or int(order) != order or not 1 <= order <= 10:
         raise TrackdynInputError(f"order must be an integer in 1..10, got {order!r}")
     length = x[-1] - x[0]
     if length < 2.0 * lam_max:
         raise TrackdynInputError(
-            f"profile length {length:g} m is too short for band {label}: "
+            f"{at}profile length {length:g} m is too short for band {label}: "
             f"need at least {2.0 * lam_max:g} m (2 x longest wavelength)"
         )
     xu, zu, dx, uniform = to_uniform_grid(x, z)
     if dx >= lam_min / 2.0:
         raise TrackdynInputError(
-            f"distance spacing {dx:g} m is too coarse for band {label}: need < {lam_min / 2:g} m"
+            f"{at}distance spacing {dx:g} m is too coarse for band {label}: "
+            f"need < {lam_min / 2:g} m"
         )
     sos = signal.butter(
         int(order), [1.0 / lam_max, 1.0 / lam_min], btype="bandpass", fs=1.0 / dx, output="sos"

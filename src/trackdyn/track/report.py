@@ -25,7 +25,9 @@ from trackdyn.units import GRAVITY
 QUALITY_BANDS = ("D1", "D2")
 
 
-def quality_table(distance, profiles: dict, segment_length: float = 200.0) -> xr.DataArray:
+def quality_table(
+    distance, profiles: dict, segment_length: float = 200.0, where: str = ""
+) -> xr.DataArray:
     """Standard deviation of longitudinal level per band, rail and segment [mm].
 
     Parameters
@@ -36,13 +38,17 @@ def quality_table(distance, profiles: dict, segment_length: float = 200.0) -> xr
         Vertical profile per rail name [m].
     segment_length : float
         Segment length for the standard deviation [m].
+    where : str
+        Source of the profiles (a file) named in error messages.
     """
     values, segments = [], None
     for band in QUALITY_BANDS:
         per_rail = []
         for rail in profiles:
             table = segment_sd(
-                distance, longitudinal_level(distance, profiles[rail], band), segment_length
+                distance,
+                longitudinal_level(distance, profiles[rail], band, where=where),
+                segment_length,
             )
             per_rail.append(table["sd_mm"].to_numpy())
             segments = table
@@ -104,8 +110,8 @@ def track_dataset(lin: LinearisedTrack) -> xr.Dataset:
                 lin.ys,
                 {"units": "m", "long_name": "static track deflection (5.11)"},
             ),
-            "sd_unloaded": quality_table(x, unloaded),
-            "sd_loaded": quality_table(x, loaded),
+            "sd_unloaded": quality_table(x, unloaded, where=g.where),
+            "sd_loaded": quality_table(x, loaded, where=g.where),
         },
         coords={
             "rail": list(RAILS),

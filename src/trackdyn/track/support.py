@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from trackdyn.errors import TrackdynInputError
+from trackdyn.limits import SUPPORT_STIFFNESS, check_within
 from trackdyn.track.interpolation import METHODS, evaluate, knot_slopes
 
 LINEAR_CURVE_MAX_LOAD = 2.0e6
@@ -63,8 +64,7 @@ class SupportCurve:
     @classmethod
     def linear(cls, stiffness: float, where: str = "linear support") -> SupportCurve:
         """A linear support of the given stiffness [N/m], from zero load up to 2 MN."""
-        if not np.isfinite(stiffness) or stiffness <= 0:
-            raise TrackdynInputError(f"{where}: stiffness must be > 0, got {stiffness!r} N/m")
+        check_within(stiffness, *SUPPORT_STIFFNESS, f"{where}: stiffness", "kN/mm", 1e6)
         load = np.array([0.0, LINEAR_CURVE_MAX_LOAD])
         return cls(load, load / stiffness, where)
 
@@ -188,9 +188,9 @@ def linearise_curves(
         Static track deflection per curve [m].
     """
     if not np.isfinite(static_load) or static_load <= 0:
-        raise TrackdynInputError(f"static wheel load must be > 0, got {static_load!r} N")
+        raise TrackdynInputError(f"static wheel load must be > 0, got {float(static_load):g} N")
     if not np.isfinite(delta) or not 0 < delta < 1:
-        raise TrackdynInputError(f"dynamic increment delta must be in (0, 1), got {delta!r}")
+        raise TrackdynInputError(f"dynamic increment delta must be in (0, 1), got {float(delta):g}")
     stack = CurveStack(curves)
     dp = delta * static_load
     p = np.array([static_load - dp, static_load + dp])

@@ -15,6 +15,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from trackdyn.errors import TrackdynInputError, check_series
+from trackdyn.limits import MAX_PROFILE, SUPPORT_STIFFNESS, check_within
 from trackdyn.track.support import CurveStack, SupportCurve, linearise_curves
 from trackdyn.track.winkler import modulus_from_stiffness
 
@@ -45,6 +46,8 @@ class Geometry:
         object.__setattr__(self, "distance", d)
         for rail in RAILS:
             _, v = check_series(d, getattr(self, rail), name=f"{rail} profile", where=self.where)
+            what = f"{self.where}: {rail} profile"
+            check_within(v, -MAX_PROFILE, MAX_PROFILE, what, "mm", 1e-3)
             object.__setattr__(self, rail, v)
 
     def profile(self, rail: str) -> np.ndarray:
@@ -147,6 +150,10 @@ class Track:
         """
         curves = self.supports.left + self.supports.right
         k2, ys = linearise_curves(curves, static_load, delta, **options)
+        bad = (k2 < SUPPORT_STIFFNESS[0]) | (k2 > SUPPORT_STIFFNESS[1])
+        if bad.any():
+            i = int(np.argmax(bad))
+            check_within(k2[i], *SUPPORT_STIFFNESS, f"{curves[i].where}: k2", "kN/mm", 1e6)
         shape = (len(RAILS), self.supports.position.size)
         return LinearisedTrack(self, static_load, delta, k2.reshape(shape), ys.reshape(shape))
 
