@@ -17,7 +17,10 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
     profile (mean over the contact's axles) and the summed stiffness each contact sees;
     ``secondary_displacement`` (time, suspension) [m]; ``wedge_force`` (time, wedge) [N];
     ``wedge_velocity`` [m/s]; ``displacement``, ``velocity`` and ``acceleration`` (time,
-    dof); ``body_<motion>_acceleration`` [m/s^2 or rad/s^2].
+    dof); ``body_<motion>_acceleration`` [m/s^2 or rad/s^2]. A model with single-wheel
+    contacts grouped by bogie side (``model.contact_sides``) also gets
+    ``wheel_load_side_mean`` (time, side) [N], the mean over the wheels of each side, which
+    compares one to one with the ``wheel_load`` of the bogie models (5.4.3).
     """
     n_axles = np.array([len(a) for a in model.contact_axles], dtype=float)
     damping_force = (out["v"] @ model.Dc.T) * model.contact_damping
@@ -106,6 +109,15 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
             "track": "nonlinear (5.14)" if nonlinear else "linearised (5.10-5.11)",
         },
     )
+    sides = [s for s in dict.fromkeys(model.contact_sides) if s]
+    if sides:
+        of_side = ds.wheel_load.groupby(xr.DataArray(list(model.contact_sides), dims="contact"))
+        ds["wheel_load_side_mean"] = (
+            of_side.mean()
+            .rename(group="side")
+            .sel(side=sides)
+            .assign_attrs(units="N", long_name="mean wheel load of each bogie side")
+        )
     for name, units in BODY_MOTIONS.items():
         if name in dofs:
             ds[f"{name}_acceleration"] = ds.acceleration.sel(dof=name, drop=True).assign_attrs(

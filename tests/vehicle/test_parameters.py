@@ -16,7 +16,7 @@ def test_loaded_preset_in_si_units():
     # 26 t axle load: static wheel load = 13 t x g (loaded preset totals 104 t)
     assert v.static_wheel_load == pytest.approx(13000 * 9.81, rel=1e-4)
     assert set(v.sources) == set(PARAMETERS)
-    assert "data.md" in v.sources["mw"]
+    assert "data.md" in v.sources["mw1"]
 
 
 def test_base_file_and_overrides(tmp_path):
