@@ -20,7 +20,8 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
     dof); ``body_<motion>_acceleration`` [m/s^2 or rad/s^2]. A model with single-wheel
     contacts grouped by bogie side (``model.contact_sides``) also gets
     ``wheel_load_side_mean`` (time, side) [N], the mean over the wheels of each side, which
-    compares one to one with the ``wheel_load`` of the bogie models (5.4.3).
+    compares one to one with the ``wheel_load`` of the bogie models (5.4.3), and the
+    coordinate ``contact_side`` naming each wheel's side.
     """
     n_axles = np.array([len(a) for a in model.contact_axles], dtype=float)
     damping_force = (out["v"] @ model.Dc.T) * model.contact_damping
@@ -111,10 +112,11 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
     )
     sides = [s for s in dict.fromkeys(model.contact_sides) if s]
     if sides:
-        of_side = ds.wheel_load.groupby(xr.DataArray(list(model.contact_sides), dims="contact"))
+        ds = ds.assign_coords(contact_side=("contact", list(model.contact_sides)))
+        of_side = ds.wheel_load.groupby("contact_side")
         ds["wheel_load_side_mean"] = (
             of_side.mean()
-            .rename(group="side")
+            .rename(contact_side="side")
             .sel(side=sides)
             .assign_attrs(units="N", long_name="mean wheel load of each bogie side")
         )
