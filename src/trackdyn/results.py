@@ -19,7 +19,11 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
     profile (mean over the contact's axles) and the summed stiffness each contact sees;
     ``secondary_displacement`` (time, suspension) [m]; ``wedge_force`` (time, wedge) [N];
     ``wedge_velocity`` [m/s]; ``displacement``, ``velocity`` and ``acceleration`` (time,
-    dof); ``body_<motion>_acceleration`` [m/s^2 or rad/s^2].
+    dof); ``body_<motion>_acceleration`` [m/s^2 or rad/s^2]. A model with single-wheel
+    contacts grouped by bogie side (``model.contact_sides``) also gets
+    ``wheel_load_side_mean`` (time, side) [N], the mean over the wheels of each side, which
+    compares one to one with the ``wheel_load`` of the bogie models (5.4.3), and the
+    coordinate ``contact_side`` naming each wheel's side.
     """
     bad = ~np.isfinite(out["q"]).all(axis=1)
     if bad.any():
@@ -115,6 +119,16 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
             "track": "nonlinear (5.14)" if nonlinear else "linearised (5.10-5.11)",
         },
     )
+    sides = [s for s in dict.fromkeys(model.contact_sides) if s]
+    if sides:
+        ds = ds.assign_coords(contact_side=("contact", list(model.contact_sides)))
+        of_side = ds.wheel_load.groupby("contact_side")
+        ds["wheel_load_side_mean"] = (
+            of_side.mean()
+            .rename(contact_side="side")
+            .sel(side=sides)
+            .assign_attrs(units="N", long_name="mean wheel load of each bogie side")
+        )
     for name, units in BODY_MOTIONS.items():
         if name in dofs:
             ds[f"{name}_acceleration"] = ds.acceleration.sel(dof=name, drop=True).assign_attrs(

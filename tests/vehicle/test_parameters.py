@@ -16,7 +16,7 @@ def test_loaded_preset_in_si_units():
     # 26 t axle load: static wheel load = 13 t x g (loaded preset totals 104 t)
     assert v.static_wheel_load == pytest.approx(13000 * 9.81, rel=1e-4)
     assert set(v.sources) == set(PARAMETERS)
-    assert "data.md" in v.sources["mw"]
+    assert "data.md" in v.sources["mw1"]
 
 
 def test_base_file_and_overrides(tmp_path):
@@ -60,3 +60,18 @@ def test_bad_files(tmp_path, text, match):
 def test_unknown_preset():
     with pytest.raises(TrackdynInputError, match="unknown vehicle preset 'tank'; known:"):
         load_vehicle("tank")
+
+
+def test_lumped_wheelset_values_are_derived(tmp_path):
+    # 5.4.3: the bogie models' wheelset is both wheelsets of a bogie; the files give one
+    # wheelset (1778 kg, 1180 kg m^2: MBSim wagon model, data.md).
+    v = load_vehicle("loaded")
+    assert (v.mw1, v.Iw1) == (pytest.approx(1778.0), pytest.approx(1180.0))
+    assert (v.mw, v.Iw) == (2 * v.mw1, 2 * v.Iw1)
+    assert v.replace(mw1=1500.0).mw == 3000.0
+    with pytest.raises(TrackdynInputError, match=r"^mw is derived \(.*\): give mw1 instead$"):
+        v.replace(mw=3000.0)
+    f = tmp_path / "lumped.toml"
+    f.write_text('base = "loaded"\n[Iw]\nvalue = 2000\nunit = "kg m^2"\nsource = "x"\n')
+    with pytest.raises(TrackdynInputError, match=r"lumped.toml: Iw is derived .*give Iw1"):
+        load_vehicle(f)

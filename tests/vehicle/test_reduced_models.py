@@ -110,6 +110,7 @@ def test_difference_to_seven_dof_falls_like_one_over_kp(stiff_primary):
 
 
 # --- (b) nonlinear stiffness alone gives no dynamic load; a change in deflection does --
+# For the single-wheel models: the 2-DOF model and the full model (one contact per wheel).
 
 
 def seating_curve(gap, stiffness=100e6):
@@ -134,8 +135,9 @@ UNIFORM_GAP = 1.0e-3  # [m] every sleeper; a realistic seating gap
 EXTRA_GAP = 2.0e-3  # [m] more on six sleepers (3 m) mid-section: a few hanging sleepers
 
 
+@pytest.mark.parametrize("model", ["2dof", "full"])
 @pytest.mark.parametrize("nonlinear", [False, True], ids=["linearised", "nonlinear"])
-def test_uniform_nonlinear_track_gives_no_dynamic_load(nonlinear):
+def test_uniform_nonlinear_track_gives_no_dynamic_load(nonlinear, model):
     # Seed §5.4.1: "it is not the nonlinearity of the track stiffness in itself that causes
     # a dynamic input, but the spatial change in track deflection under a given load".
     v = load_vehicle("loaded")
@@ -148,13 +150,14 @@ def test_uniform_nonlinear_track_gives_no_dynamic_load(nonlinear):
     ds = simulate(
         v,
         track,
-        RunOptions(model="2dof", speed_kmh=SPEED * 3.6, nonlinear=nonlinear, store_every=1),
+        RunOptions(model=model, speed_kmh=SPEED * 3.6, nonlinear=nonlinear, store_every=1),
     )
     assert np.abs(ds.wheel_load.values - ps).max() < 1e-6 * ps
 
 
+@pytest.mark.parametrize("model", ["2dof", "full"])
 @pytest.mark.parametrize("nonlinear", [False, True], ids=["linearised", "nonlinear"])
-def test_spatial_change_in_deflection_gives_dynamic_load(nonlinear):
+def test_spatial_change_in_deflection_gives_dynamic_load(nonlinear, model):
     v = load_vehicle("loaded")
     ps = v.static_wheel_load
     sleepers = np.arange(0.0, LENGTH + SLEEPER_SPACING / 2, SLEEPER_SPACING)
@@ -171,7 +174,7 @@ def test_spatial_change_in_deflection_gives_dynamic_load(nonlinear):
     ds = simulate(
         v,
         track,
-        RunOptions(model="2dof", speed_kmh=SPEED * 3.6, nonlinear=nonlinear, store_every=1),
+        RunOptions(model=model, speed_kmh=SPEED * 3.6, nonlinear=nonlinear, store_every=1),
     )
     assert np.abs(ds.wheel_load.values - ps).max() > 0.01 * ps
 

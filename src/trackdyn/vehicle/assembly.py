@@ -127,6 +127,9 @@ class Contact:
         Axle positions ahead of the vehicle centre [m].
     damping : float
         Track damping ρ2 of the contact [N s/m].
+    side : str
+        Bogie side the wheel belongs to (e.g. ``"FL"``) when the contact is one of several
+        single wheels reported also as their mean; empty otherwise.
     """
 
     name: str
@@ -134,6 +137,7 @@ class Contact:
     rail: str
     axles: tuple[float, ...]
     damping: float
+    side: str = ""
 
 
 @dataclass
@@ -224,6 +228,7 @@ class Assembly:
             contact_rails=tuple(c.rail for c in self.contacts),
             contact_axles=tuple(c.axles for c in self.contacts),
             contact_damping=np.array([c.damping for c in self.contacts]),
+            contact_sides=tuple(c.side for c in self.contacts),
             static_wheel_load=static_wheel_load,
         )
 
@@ -257,6 +262,8 @@ class Model:
         Axle positions of each contact ahead of the vehicle centre [m].
     contact_damping : ndarray
         Track damping per contact [N s/m].
+    contact_sides : tuple of str
+        Bogie side of each single-wheel contact (``""`` if not grouped).
     static_wheel_load : float
         Static load per wheel [N].
     """
@@ -276,6 +283,7 @@ class Model:
     contact_rails: tuple[str, ...]
     contact_axles: tuple[tuple[float, ...], ...]
     contact_damping: np.ndarray
+    contact_sides: tuple[str, ...]
     static_wheel_load: float
 
     @property

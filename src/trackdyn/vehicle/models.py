@@ -1,10 +1,21 @@
-"""The seed's models (2-, 4-, 7- and 11-DOF) as assemblies of one vehicle parameter set.
+"""The seed's models (2-, 4-, 7- and 11-DOF) and the full model, from one parameter set.
 
 Coordinates (positive down): body bounce ``y1``, roll ``θ``, pitch ``α``; bogie frame
 bounce ``yF, yB`` and roll ``φF, φB``; lumped wheelset bounce ``zF, zB`` and roll
 ``ωF, ωB``. The 4- and 7-DOF models have no primary suspension (5.4.2: it arrives with the
 11-DOF model), so the bogie frame moves with the wheelset and its mass and roll inertia
-are lumped into it. All bogie models use the bogie approximation of 5.4.3.
+are lumped into it. These bogie models use the bogie approximation of 5.4.3.
+
+The full model is the one the seed checked that approximation against (5.4.3: a
+multibody model "in which the side frames of the bogies were modelled as separate
+bodies"): per bogie two side frames (bounce, pitch) and two wheelsets (bounce, roll), one
+contact per wheel (19 degrees of freedom, 8 contacts). See `full`.
+
+References
+----------
+Fröhling, R.D. (1997). Deterioration of railway track due to dynamic vehicle loading and
+spatially varying track stiffness. PhD thesis, University of Pretoria. Chapter 5,
+eqs 5.12-5.33.
 """
 
 from __future__ import annotations
@@ -97,6 +108,64 @@ def eleven_dof(v: Vehicle) -> Model:
     return asm.build("11dof", v.static_wheel_load)
 
 
+def full(v: Vehicle) -> Model:
+    """Side frames and wheelsets as separate bodies, one contact per wheel.
+
+    Bodies: the car body (bounce, roll, pitch; the bolsters lumped in as in the 11-DOF
+    model); per bogie (``front`` at ``+b_cc``, ``back`` at ``-b_cc``) a ``left`` and a
+    ``right`` side frame of mass ``m2 / 2`` and pitch inertia ``Isf`` (bounce and pitch,
+    at ``±b``: together the bogie frame roll inertia ``m2 b²``, which the presets' ``I2``
+    equals); per bogie a leading and a trailing wheelset of mass ``mw1`` and roll inertia
+    ``Iw1`` (bounce and roll), numbered 1-4 from the front.
+
+    Elements: per bogie side the secondary spring ``k1`` and the friction wedge (5.30-5.33)
+    between the body at ``(±b, ±b_cc)`` and the side frame's centre (suspensions and
+    wedges ``FL, FR, BL, BR`` as in the 11-DOF model); per axlebox (side frame at ``±a``
+    from its centre to the wheelset at ``±b``) half the per-side primary ``kp / 2`` and
+    ``rho_p / 2``; per wheel (at ``±l``) a contact ``1L .. 4R`` on its own rail at its own
+    axle (``±b_cc ± a``) with track damping ``rho2`` and the track stiffness and input
+    under that wheel alone, so the nonlinear track of 5.14 applies per wheel.
+
+    With the same input under both axles of a bogie the two wheelsets move alike, the side
+    frames do not pitch and the model is the 11-DOF model with track damping ``2 rho2``
+    per bogie side: the printed 5.26-5.29 give one ``rho2`` per two wheels (the contacts
+    of the 11-DOF model sum the stiffness of the two axles, not their damping).
+    """
+    asm = Assembly()
+    body = asm.add(Body("body", v.m1, v.I1, v.Ip, ("bounce", "roll", "pitch")))
+    axle = 0
+    for end, x in (("front", v.b_cc), ("back", -v.b_cc)):
+        frames = {
+            side: asm.add(
+                Body(
+                    f"{end}_{rail}_frame",
+                    v.m2 / 2,
+                    pitch_inertia=v.Isf,
+                    motions=("bounce", "pitch"),
+                )
+            )
+            for side, _, rail in SIDES
+        }
+        for lead in (v.a, -v.a):
+            axle += 1
+            ws = asm.add(
+                Body(f"wheelset_{axle}", v.mw1, roll_inertia=v.Iw1, motions=("bounce", "roll"))
+            )
+            for side, sign, rail in SIDES:
+                box, wheel = frames[side].at(sign * v.b, lead), ws.at(sign * v.b)
+                asm.add(Spring(box, wheel, v.kp / 2))
+                asm.add(Damper(box, wheel, v.rho_p / 2))
+                name = end[0].upper() + side
+                asm.add(
+                    Contact(f"{axle}{side}", ws.at(sign * v.l), rail, (x + lead,), v.rho2, name)
+                )
+        for side, sign, _ in SIDES:
+            p, name = body.at(sign * v.b, x), end[0].upper() + side
+            asm.add(Spring(p, frames[side].at(sign * v.b), v.k1, name))
+            asm.add(_wedge(v, name, p, frames[side].at(sign * v.b)))
+    return asm.build("full", v.static_wheel_load)
+
+
 def two_dof_wedge(v: Vehicle) -> Model:
     """The 2-DOF model with half a side's friction wedge in place of the viscous damper."""
     return two_dof(v, wedge=True)
@@ -108,6 +177,7 @@ MODELS = {
     "4dof": four_dof,
     "7dof": seven_dof,
     "11dof": eleven_dof,
+    "full": full,
 }
 """The models by name: the one list that validators, help texts and errors derive from."""
 

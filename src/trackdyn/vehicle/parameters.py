@@ -17,13 +17,14 @@ PARAMETERS: dict[str, tuple[str, str]] = {
     "m1": ("kg", "body mass"),
     "I1": ("kg m^2", "body roll inertia"),
     "Ip": ("kg m^2", "body pitch inertia"),
-    "m2": ("kg", "bogie frame mass (per bogie)"),
+    "m2": ("kg", "bogie frame mass per bogie (two side frames)"),
     "I2": ("kg m^2", "bogie frame roll inertia"),
-    "mw": ("kg", "lumped wheelset mass per bogie (twice one wheelset)"),
-    "Iw": ("kg m^2", "lumped wheelset roll inertia per bogie"),
+    "mw1": ("kg", "mass of one wheelset"),
+    "Iw1": ("kg m^2", "roll inertia of one wheelset"),
+    "Isf": ("kg m^2", "pitch inertia of one side frame about its centre (full model only)"),
     "k1": ("N/m", "secondary spring stiffness per side of a bogie"),
-    "kp": ("N/m", "primary stiffness per side of a bogie"),
-    "rho_p": ("N s/m", "primary damping per side of a bogie"),
+    "kp": ("N/m", "primary stiffness per side of a bogie (two axleboxes)"),
+    "rho_p": ("N s/m", "primary damping per side of a bogie (two axleboxes)"),
     "rho1": ("N s/m", "viscous secondary damping per wheel (2-DOF model only)"),
     "rho2": ("N s/m", "track damping per wheel-rail contact"),
     "b": ("m", "half lateral spacing of the suspensions"),
@@ -37,6 +38,12 @@ PARAMETERS: dict[str, tuple[str, str]] = {
     "C_slope": ("N s/m", "slope of the friction law near zero relative velocity"),
 }
 
+DERIVED: dict[str, tuple[str, str]] = {
+    "mw": ("mw1", "lumped wheelset mass per bogie, 2 mw1 (5.4.3)"),
+    "Iw": ("Iw1", "lumped wheelset roll inertia per bogie, 2 Iw1 (5.4.3)"),
+}
+"""Seed symbols derived from a parameter (properties of `Vehicle`): the parameter they
+come from and a description, for messages."""
 MAY_BE_ZERO = {"rho_p", "rho1", "rho2", "mu", "x_ss"}
 PRESETS = files("trackdyn.vehicle").joinpath("presets")
 
@@ -46,6 +53,9 @@ class Vehicle:
     """A vehicle parameter set (seed symbols, SI units); see `PARAMETERS` for meanings.
 
     Build one with `load_vehicle` (preset name or TOML file) and vary it with `replace`.
+    The parameters describe single wheelsets (``mw1``, ``Iw1``) and side frames (``m2 / 2``
+    each, pitch inertia ``Isf``) as the full model needs them; the lumped values of the
+    bogie models are derived from them (`DERIVED`: ``mw = 2 mw1``, ``Iw = 2 Iw1``).
     """
 
     m1: float
@@ -53,8 +63,9 @@ class Vehicle:
     Ip: float
     m2: float
     I2: float
-    mw: float
-    Iw: float
+    mw1: float
+    Iw1: float
+    Isf: float
     k1: float
     kp: float
     rho_p: float
@@ -92,13 +103,20 @@ class Vehicle:
                 f"tan(alpha_w) = {math.tan(self.alpha_w):.3f}"
             )
 
+    @property
+    def mw(self) -> float:
+        """Lumped wheelset mass per bogie, ``2 mw1`` (5.4.3) [kg]."""
+        return 2 * self.mw1
+
+    @property
+    def Iw(self) -> float:  # noqa: N802 - the seed's symbol
+        """Lumped wheelset roll inertia per bogie, ``2 Iw1`` (5.4.3) [kg m^2]."""
+        return 2 * self.Iw1
+
     def replace(self, **changes) -> Vehicle:
         """A copy with some parameters changed [SI units]; an unknown name is refused."""
-        unknown = sorted(set(changes) - set(PARAMETERS) - {"name"})
-        if unknown:
-            raise TrackdynInputError(
-                f"unknown vehicle parameter {unknown[0]!r}; known: {', '.join(PARAMETERS)}"
-            )
+        for key in changes:
+            _check_name(key)
         sources = dict(self.sources)
         sources.update({k: "override" for k in changes if k != "name"})
         return dataclasses.replace(self, sources=sources, **changes)
@@ -111,6 +129,17 @@ class Vehicle:
     def as_dict(self) -> dict[str, float]:
         """Parameter values by name [SI units]."""
         return {k: getattr(self, k) for k in PARAMETERS}
+
+
+def _check_name(key: str, where: str = "") -> None:
+    """Refuse a name that is not a parameter, saying what to give for a derived one."""
+    if key in DERIVED:
+        source, meaning = DERIVED[key]
+        raise TrackdynInputError(f"{where}{key} is derived ({meaning}): give {source} instead")
+    if key not in PARAMETERS and key != "name":
+        raise TrackdynInputError(
+            f"{where}unknown vehicle parameter {key!r}; known: {', '.join(PARAMETERS)}"
+        )
 
 
 def _resolve(name_or_path) -> Path:
@@ -149,8 +178,7 @@ def load_vehicle(name_or_path, **overrides) -> Vehicle:
         values, sources = base.as_dict(), dict(base.sources)
     name = str(data.pop("name", path.stem))
     for key, entry in data.items():
-        if key not in PARAMETERS:
-            raise TrackdynInputError(f"{path}: unknown vehicle parameter {key!r}")
+        _check_name(key, f"{path}: ")
         values[key] = si_value(entry, key, PARAMETERS[key][0], str(path))
         sources[key] = str(entry["source"])
     missing = [k for k in PARAMETERS if k not in values]
