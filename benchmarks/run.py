@@ -15,7 +15,7 @@ import numpy as np
 
 from trackdyn.options import RunOptions
 from trackdyn.simulation import simulate
-from trackdyn.solver.central import integrate_chunk, step_matrices
+from trackdyn.solver.central import advance, step_matrices
 from trackdyn.track.synthetic import example_track
 from trackdyn.vehicle.models import build_model
 from trackdyn.vehicle.parameters import load_vehicle
@@ -24,13 +24,13 @@ MODELS = ("2dof", "2dof-wedge", "4dof", "7dof", "11dof")
 
 
 def kernel_args(model, n_steps, dt, rng, store_every=1):
-    """Arguments of `integrate_chunk` for ``n_steps`` of realistic input (8 Hz, 1 mm)."""
+    """Arguments of `advance` for ``n_steps`` of realistic input (8 Hz, 1 mm)."""
     m = model
     nc, n, nw = len(m.contact_names), len(m.dof_names), len(m.wedge_names)
     k = np.full((n_steps, nc), 2e8 if nc > 1 else 1e8)
     r = 1e-3 * np.sin(np.arange(n_steps)[:, None] * dt * 2 * np.pi * 8 + rng.random(nc))
     rows = (n_steps - 1) // store_every + 1
-    out = [np.empty((rows, w)) for w in (n, n, n, nc, nw, nw)]
+    out = [np.empty((rows, w)) for w in (n, n, n, nc, nw, nw, nc, nc)]
     z = np.zeros(2 * n)
     args = (
         *step_matrices(m, dt),
@@ -80,10 +80,10 @@ def main():
     )
     for name in MODELS:
         model = build_model(name, vehicle)
-        time_kernel(integrate_chunk, model, 10, dt, 1)  # compile
-        t_fast = time_kernel(integrate_chunk, model, steps, dt, 5)
-        t_fast10 = time_kernel(integrate_chunk, model, steps, dt, 5, store_every=10)
-        t_py = time_kernel(integrate_chunk.py_func, model, py_steps, dt, 1)
+        time_kernel(advance, model, 10, dt, 1)  # compile
+        t_fast = time_kernel(advance, model, steps, dt, 5)
+        t_fast10 = time_kernel(advance, model, steps, dt, 5, store_every=10)
+        t_py = time_kernel(advance.py_func, model, py_steps, dt, 1)
         simulate(vehicle, lin, RunOptions(model=name), end=50.0)  # warm caches
         tracemalloc.start()
         t = time.perf_counter()
