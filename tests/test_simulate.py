@@ -4,10 +4,11 @@ import re
 
 import numpy as np
 import pytest
+import xarray as xr
 
 from trackdyn.errors import TrackdynInputError
 from trackdyn.options import RunOptions
-from trackdyn.simulation import OUTPUT_STEP, simulate
+from trackdyn.simulation import OUTPUT_STEP, simulate, simulate_batch
 from trackdyn.track.support import SupportCurve
 from trackdyn.track.synthetic import synthetic_track
 from trackdyn.track.track import Geometry, Supports, Track
@@ -62,7 +63,8 @@ def test_track_shorter_than_the_vehicle_is_refused(lin):
         simulate(V, lin, RunOptions(speed_kmh=72.0), start=70.0)
 
 
-def test_nonlinear_track_with_a_pure_seating_gap():
+@pytest.mark.parametrize("solver", ["central", "reference"])
+def test_nonlinear_track_with_a_pure_seating_gap(solver):
     # Zero load up to 1 mm, then 100 kN/mm: the static state sits 1 mm + Ps/k down and a
     # uniform level track gives no dynamic load (seed §5.4.1).
     x = np.arange(0, 30.01, 0.25)
@@ -73,7 +75,8 @@ def test_nonlinear_track_with_a_pure_seating_gap():
         Geometry(x, 0 * x, 0 * x),
         Supports(sleepers, (curve,) * sleepers.size, (curve,) * sleepers.size),
     )
-    ds = simulate(V, trk, RunOptions(model="2dof", speed_kmh=72.0, nonlinear=True))
+    options = RunOptions(model="2dof", speed_kmh=72.0, nonlinear=True, solver=solver)
+    ds = simulate(V, trk, options)
     assert float(np.abs(ds.wheel_load - V.static_wheel_load).max()) < 1e-6 * V.static_wheel_load
     wheel = float(ds.displacement.sel(dof="wheel_bounce")[0])
     assert wheel == pytest.approx(1e-3 + V.static_wheel_load / 100e6, rel=1e-3)
@@ -84,3 +87,30 @@ def test_load_track_refuses_non_paths():
 
     with pytest.raises(TrackdynInputError, match="geometry must be a file path .* got int"):
         load_track(123, 456)
+
+
+def test_batch_gives_each_run_its_own_results(lin):
+    # Runs side by side in one compiled call give, to the bit, what each gives alone:
+    # different speeds (so different step counts), parameters and storage, a run refused
+    # before it starts, and a run whose Newton iteration fails part way.
+    soft = load_vehicle("loaded", kp=0.7 * V.kp, mu=1.3 * V.mu)
+    # one Newton pass allowed: wedges with a tiny C_slope never leave the stick state and
+    # need no second pass, the default wedges fail at their first stick/slip change
+    sticky = load_vehicle("loaded", C_slope=1.0)
+    vehicles = [V, soft, V, sticky, V]
+    options = [
+        RunOptions(speed_kmh=72.0, store_every=1),
+        RunOptions(speed_kmh=50.0, store_every=3),
+        RunOptions(speed_kmh=72.0, dt_s=0.05),
+        RunOptions(speed_kmh=90.0),
+        RunOptions(speed_kmh=60.0),
+    ]
+    batch = simulate_batch(vehicles[:3], lin, options[:3])
+    assert isinstance(batch[2], TrackdynInputError)
+    for v, o, ds in zip(vehicles[:2], options[:2], batch[:2], strict=True):
+        xr.testing.assert_identical(ds, simulate(v, lin, o))
+    failing = simulate_batch(vehicles[3:], lin, options[3:], newton_max_iter=1)
+    xr.testing.assert_identical(failing[0], simulate(sticky, lin, options[3], newton_max_iter=1))
+    with pytest.raises(TrackdynInputError) as alone:
+        simulate(V, lin, options[4], newton_max_iter=1)
+    assert str(failing[1]) == str(alone.value)

@@ -14,12 +14,14 @@ store_every = 10       # optional; default: one stored step per millisecond
 delta = 0.3            # dynamic wheel load increment of the linearisation
 extrapolate = false    # true: allow Ps ± ΔP beyond the measured curves
 nonlinear = false      # true: the bicubic track of 5.14 (single-wheel contacts)
+solver = "central"     # "reference": scipy DOP853 at tight tolerance, to check a case
 ```
 """
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Literal
 
 from pydantic import (
     BaseModel,
@@ -61,6 +63,9 @@ class RunOptions(Strict):
     nonlinear : bool
         Take the track force from the bicubic surface of 5.14 instead of the linearised
         track (models whose contacts each stand for one wheel).
+    solver : {"central", "reference"}
+        The compiled central-difference scheme, or scipy's DOP853 at tight tolerance
+        (slow; to check a case), see `trackdyn.solver`.
     """
 
     model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
@@ -72,6 +77,7 @@ class RunOptions(Strict):
     delta: float = Field(0.3, gt=0, lt=1)
     extrapolate: bool = False
     nonlinear: bool = False
+    solver: Literal["central", "reference"] = "central"
 
     @field_validator("model")
     @classmethod

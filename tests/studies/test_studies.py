@@ -5,6 +5,7 @@ import dataclasses
 import numpy as np
 import pandas as pd
 import pytest
+import xarray as xr
 from typer.testing import CliRunner
 
 from trackdyn.cli import app
@@ -12,7 +13,15 @@ from trackdyn.io import write_geometry, write_supports
 from trackdyn.options import RunOptions
 from trackdyn.parallel import run_tasks
 from trackdyn.simulation import simulate
-from trackdyn.studies.runner import Task, TrackRef, gather, run_task
+from trackdyn.studies.runner import (
+    Task,
+    TrackRef,
+    batches,
+    gather,
+    in_order,
+    run_batch,
+    run_task,
+)
 from trackdyn.studies.scenarios import Study, tasks
 from trackdyn.track.excitation import RIGID_STIFFNESS, excitation_case
 from trackdyn.track.synthetic import SoftSpot, synthetic_track
@@ -133,3 +142,14 @@ def test_study_refuses_bad_file(tmp_path):
     study.write_text('kind = "matrix"\n[matrix]\ndamping = { high = { muu = 2.0 } }\n')
     result = CliRunner().invoke(app, ["study", str(study), "--out", str(tmp_path / "o")])
     assert result.exit_code == 2 and "unknown vehicle parameter 'muu'" in result.stderr
+
+
+def test_batched_study_gives_the_one_by_one_table(files):
+    runs = small_tasks(files)
+    grouped = batches(runs, size=3)
+    # the failing run is in a batch with good ones; the batches hold at most 3 runs
+    assert sorted(len(b) for b in grouped) == [2, 3]
+    one_by_one = gather(run_tasks(runs, run_task, workers=1))
+    batched = gather(in_order(run_tasks(grouped, run_batch, workers=1)))
+    pd.testing.assert_frame_equal(one_by_one[0], batched[0])
+    xr.testing.assert_identical(one_by_one[1], batched[1])

@@ -16,7 +16,7 @@ def test_loaded_preset_in_si_units():
     # 26 t axle load: static wheel load = 13 t x g (loaded preset totals 104 t)
     assert v.static_wheel_load == pytest.approx(13000 * 9.81, rel=1e-4)
     assert set(v.sources) == set(PARAMETERS)
-    assert "data.md" in v.sources["mw1"]
+    assert "MBSim" in v.sources["mw1"]
 
 
 def test_base_file_and_overrides(tmp_path):
@@ -64,7 +64,7 @@ def test_unknown_preset():
 
 def test_lumped_wheelset_values_are_derived(tmp_path):
     # 5.4.3: the bogie models' wheelset is both wheelsets of a bogie; the files give one
-    # wheelset (1778 kg, 1180 kg m^2: MBSim wagon model, data.md).
+    # wheelset (1778 kg, 1180 kg m^2: MBSim freight wagon example).
     v = load_vehicle("loaded")
     assert (v.mw1, v.Iw1) == (pytest.approx(1778.0), pytest.approx(1180.0))
     assert (v.mw, v.Iw) == (2 * v.mw1, 2 * v.Iw1)

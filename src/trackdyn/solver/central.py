@@ -21,37 +21,41 @@ starts from the previous step's states and usually needs one solve. The matrices
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
+from trackdyn.errors import TrackdynInputError
+from trackdyn.solver.statics import (
+    Problem,
+    contact_table_force,
+    failure,
+    start_path,
+    table_step,
+    wedge_forces,
+    wedge_table,
+    widths,
+)
 
-@njit(cache=True, inline="always")
-def contact_table_force(table, y_start, y_step, deflection):
-    """Tabulated track force [N] at ``deflection`` [m]: zero before the table, linear after."""
-    if deflection <= y_start:
-        return 0.0
-    u = (deflection - y_start) / y_step
-    j = int(u)
-    last = table.size - 1
-    if j >= last:
-        return table[last] + (u - last) * (table[last] - table[last - 1])
-    return table[j] + (u - j) * (table[j + 1] - table[j])
+CHUNK_STEPS = 20_000
+"""Steps of all runs of a batch advanced per compiled call; bounds the memory of the
+sampled track input."""
 
 
 @njit(cache=True, fastmath=True, error_model="numpy")
-def integrate_chunk(
+def advance(
     p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dc_idx, dc_val, dw_idx, dw_val,
     H, jinv, wedge, static_load,
     k_in, r_in, table, y_start, y_step,
     z, dt, step0, store_every, max_iter,
-    out_q, out_v, out_a, out_fc, out_fw, out_vw,
+    out_q, out_v, out_a, out_fc, out_fw, out_vw, out_k, out_r,
 ):  # fmt: skip
-    """Advance ``k_in.shape[0]`` steps from ``z = [q0, q-1]``, updated in place.
+    """Advance one run ``k_in.shape[0]`` steps from ``z = [q0, q-1]``, updated in place.
 
     Contacts are linear, ``f = k (Dc q - r)``, when ``table`` has no rows, and tabulated
     (``f = P(Dc q - r) - Ps``) otherwise. Every ``store_every``-th global step is written
-    to the ``out_*`` arrays (displacement, velocity, acceleration, contact force beyond
-    static without damping, wedge force, wedge velocity).
+    to the ``out_*`` arrays from their first row on (`OUTPUTS`).
 
     Returns -1 on success, or the chunk-local index of the step whose Newton iteration
     did not converge.
@@ -155,6 +159,8 @@ def integrate_chunk(
                 out_a[stored, i] = (q1[i] - 2.0 * z[i] + z[n + i]) * invdt2
             for c in range(nc):
                 out_fc[stored, c] = fc[c]
+                out_k[stored, c] = k_in[s, c]
+                out_r[stored, c] = r_in[s, c]
             for w in range(nw):
                 out_fw[stored, w] = F[w]
                 out_vw[stored, w] = v[w]
@@ -166,34 +172,47 @@ def integrate_chunk(
     return -1
 
 
-def wedge_forces(wedge, d, v):
-    """Friction force of each wedge (eqs 5.30-5.33) [N], outside the compiled loop.
+@njit(cache=True, parallel=True)
+def advance_batch(
+    p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dc_idx, dc_val, dw_idx, dw_val,
+    H, jinv, wedge, static_load,
+    k_in, r_in, table, y_start, y_step, in_start,
+    z, dt, step0, store_every, max_iter, row0,
+    out_q, out_v, out_a, out_fc, out_fw, out_vw, out_k, out_r, status,
+):  # fmt: skip
+    """`advance` for a batch of runs, in parallel over the runs.
 
-    Parameters
-    ----------
-    wedge : ndarray
-        Per wedge ``x_ss``, slip factors and ``C_slope``, as from `step_matrices`.
-    d : ndarray
-        Displacement across each suspension [m].
-    v : ndarray
-        Relative velocity across each suspension [m/s].
+    Every array of `StepMatrices` and ``static_load, y_start, y_step, z, dt, step0,
+    store_every`` carry a leading run axis; the inputs of run ``b`` are the rows
+    ``in_start[b]:in_start[b + 1]`` of ``k_in``, ``r_in`` (and ``table``), its stored
+    steps go to the output rows from ``row0[b]`` on. ``status[b]`` is set as `advance`
+    returns it.
     """
-    normal = np.maximum(wedge[:, 0] + d, 0.0)
-    return np.clip(wedge[:, 3] * v, -normal * wedge[:, 2], normal * wedge[:, 1])
+    for b in prange(z.shape[0]):
+        lo, hi = in_start[b], in_start[b + 1]
+        tab = table[lo:hi] if table.shape[0] > 0 else table
+        r0 = row0[b]
+        status[b] = advance(
+            p_idx[b], p_val[b], gc_idx[b], gc_val[b], gw_idx[b], gw_val[b], dc_idx[b],
+            dc_val[b], dw_idx[b], dw_val[b], H[b], jinv[b], wedge[b], static_load[b],
+            k_in[lo:hi], r_in[lo:hi], tab, y_start[b], y_step[b],
+            z[b], dt[b], step0[b], store_every[b], max_iter,
+            out_q[r0:], out_v[r0:], out_a[r0:], out_fc[r0:], out_fw[r0:], out_vw[r0:],
+            out_k[r0:], out_r[r0:],
+        )  # fmt: skip
 
 
-def start_state(model, wedge, q, dt):
-    """``z = [q0, q-1]`` for a start on the static path ``q`` (states at t = 0, dt, 2dt).
+def start_state(p: Problem, wedge) -> np.ndarray:
+    """``z = [q0, q-1]`` for a start on the static path (`start_path`).
 
-    The velocity is that of the static path (second-order one-sided difference) and the
-    acceleration follows from the equations of motion (springs and track balance at static
-    equilibrium, leaving damping and friction): ``q-1 = q0 - dt v0 + dt²/2 a0``, a start
-    that keeps the scheme second-order accurate.
+    The acceleration follows from the equations of motion (springs and track balance at
+    static equilibrium, leaving damping and friction): ``q-1 = q0 - dt v0 + dt²/2 a0``, a
+    start that keeps the scheme second-order accurate.
     """
-    q0, q1, q2 = q
-    v0 = (-3 * q0 + 4 * q1 - q2) / (2 * dt)
-    friction = wedge_forces(wedge, model.Dw @ q0, model.Dw @ v0)
-    a0 = -(model.C @ v0 + model.Dw.T @ friction) / np.diag(model.M)
+    m, dt = p.model, p.dt
+    q0, v0 = start_path(p)
+    friction = wedge_forces(wedge, m.Dw @ q0, m.Dw @ v0)
+    a0 = -(m.C @ v0 + m.Dw.T @ friction) / np.diag(m.M)
     return np.r_[q0, q0 - dt * v0 + 0.5 * dt**2 * a0]
 
 
@@ -212,8 +231,26 @@ def _sparse_rows(D):
     return idx, val
 
 
-def step_matrices(model, dt):
-    """Constant arrays of the scheme for `integrate_chunk`, from a `Model` and the step [s].
+class StepMatrices(NamedTuple):
+    """Constant arrays of the scheme (`step_matrices`), in the order `advance` takes them."""
+
+    p_idx: np.ndarray
+    p_val: np.ndarray
+    gc_idx: np.ndarray
+    gc_val: np.ndarray
+    gw_idx: np.ndarray
+    gw_val: np.ndarray
+    dc_idx: np.ndarray
+    dc_val: np.ndarray
+    dw_idx: np.ndarray
+    dw_val: np.ndarray
+    H: np.ndarray
+    jinv: np.ndarray
+    wedge: np.ndarray
+
+
+def step_matrices(model, dt) -> StepMatrices:
+    """Constant arrays of the scheme for `advance`, from a `Model` and the step [s].
 
     The sparse rows (`_sparse_rows`) of ``P = [A^-1 (2M/Δt² - K), -A^-1 (M/Δt² - C/(2Δt))]``
     acting on ``[q0, q-1]``, of ``Gc^T`` and ``Gw^T`` with ``Gc = A^-1 Dc^T`` and
@@ -221,7 +258,7 @@ def step_matrices(model, dt):
     ``I + H diag(C_slope·stick)`` for every stick/slip combination; and per wedge
     ``x_ss [m]``, the slip force per unit spring
     compression in compression and in extension ``k_ss μ / (tan α_w ∓ μ)`` [N/m], and
-    ``C_slope`` [N s/m].
+    ``C_slope`` [N s/m] (`wedge_table`).
     """
     M, C, K, Dc, Dw = model.M, model.C, model.K, model.Dc, model.Dw
     A = M / dt**2 + C / (2 * dt)
@@ -229,16 +266,84 @@ def step_matrices(model, dt):
     P = np.hstack([Ainv @ (2 * M / dt**2 - K), -Ainv @ (M / dt**2 - C / (2 * dt))])
     Gw = Ainv @ Dw.T
     H = Dw @ Gw / (2 * dt)
-    k_ss, x_ss, mu, tan_a, c_slope = model.wedge_params.T
-    wedge = np.column_stack([x_ss, k_ss * mu / (tan_a - mu), k_ss * mu / (tan_a + mu), c_slope])
+    wedge = wedge_table(model)
+    c_slope = wedge[:, 3]
     nw = Dw.shape[0]
     jinv = np.empty((2**nw, nw, nw))
     for mask in range(2**nw):
         stick = np.array([(mask >> w) & 1 for w in range(nw)], dtype=float)
         jinv[mask] = np.linalg.inv(np.eye(nw) + H * (c_slope * stick)[None, :])
     sparse = [_sparse_rows(x) for x in (P, (Ainv @ Dc.T).T, Gw.T, Dc, Dw)]
-    wedge = np.ascontiguousarray(wedge.reshape(nw, 4))
-    return (*(a for pair in sparse for a in pair), H, jinv, wedge)
+    return StepMatrices(*(a for pair in sparse for a in pair), H, jinv, wedge)
+
+
+def _stack(arrays):
+    """Arrays of the runs along a new first axis, zero-padded to the widest."""
+    shape = np.max([a.shape for a in arrays], axis=0)
+    out = np.zeros((len(arrays), *shape), arrays[0].dtype)
+    for b, a in enumerate(arrays):
+        out[(b, *(slice(0, s) for s in a.shape))] = a
+    return out
+
+
+def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> list:
+    """Integrate runs of one model side by side: one compiled call per block of steps.
+
+    Parameters
+    ----------
+    problems : list of Problem
+        Runs of models with the same degrees of freedom, contacts and wedges, and the
+        same kind of contact (linear or tabulated); dt, steps, storage, inputs and
+        parameters may differ. A run's results do not depend on the others in the batch.
+    newton_max_iter : int
+        Newton iterations allowed per step.
+    advanced : callable, optional
+        Called with the number of steps done after each block.
+
+    Returns
+    -------
+    list
+        Per run, a dict of the `OUTPUTS` arrays, or the `TrackdynInputError` that
+        stopped it.
+    """
+    mats = [step_matrices(p.model, p.dt) for p in problems]
+    stacked = StepMatrices(*(_stack(list(f)) for f in zip(*mats, strict=True)))
+    errors: list = [None] * len(problems)
+    z = np.zeros((len(problems), 2 * len(problems[0].model.dof_names)))
+    for b, (p, m) in enumerate(zip(problems, mats, strict=True)):
+        try:
+            z[b] = start_state(p, m.wedge)
+        except TrackdynInputError as exc:
+            errors[b] = exc
+    rows = np.cumsum([0] + [p.n_store for p in problems])
+    flat = {name: np.empty((rows[-1], w)) for name, w in widths(problems[0].model).items()}
+    every = np.array([p.store_every for p in problems])
+    y_start, y_step = np.array([table_step(p.inputs.grid) for p in problems]).T
+    static = np.array([p.model.static_wheel_load for p in problems])
+    dts = np.array([p.dt for p in problems])
+    status = np.empty(len(problems), np.int64)
+    block = max(1, CHUNK_STEPS // len(problems))
+    for first in range(0, max(p.n_steps for p in problems), block):
+        sampled, counts = [], []
+        for p, err in zip(problems, errors, strict=True):
+            counts.append(0 if err else max(min(block, p.n_steps - first), 0))
+            centre = p.centre0 + p.speed * p.dt * np.arange(first, first + counts[-1])
+            sampled.append(p.inputs(centre))
+        k, r, table = (np.concatenate(a) for a in zip(*sampled, strict=True))
+        advance_batch(
+            *stacked, static, k, r, table, y_start, y_step,
+            np.cumsum([0, *counts]), z, dts, np.full(len(problems), first), every,
+            newton_max_iter, rows[:-1] + (first + every - 1) // every,
+            *flat.values(), status,
+        )  # fmt: skip
+        for b in np.flatnonzero(status >= 0):
+            errors[b] = failure(problems[b], first + int(status[b]))
+        if advanced is not None:
+            advanced(sum(counts))
+    return [
+        errors[b] or {name: a[rows[b] : rows[b + 1]] for name, a in flat.items()}
+        for b in range(len(problems))
+    ]
 
 
 def highest_frequency(M, K) -> float:

@@ -2,7 +2,10 @@
 
 Each task carries parameters and a reference to the track (file paths, or the built-in
 example), never the track arrays; workers read and linearise the track once and keep it.
-A failing run is reported with its labels and the others still finish.
+A failing run is reported with its labels and the others still finish. `batches` groups
+the tasks that share a track and model, and `run_batch` runs such a group side by side in
+one compiled call per block of steps: ``in_order(run_tasks(batches(tasks), run_batch))``
+gives the table ``run_tasks(tasks, run_task)`` gives.
 """
 
 from __future__ import annotations
@@ -65,17 +68,58 @@ def run_task(task: Task) -> dict:
 
     Never raises: a failure comes back as ``{"labels", "error"}``.
     """
-    from trackdyn.results import summary
-    from trackdyn.simulation import simulate
+    return run_batch([(0, task)])[0][1]
+
+
+def batches(tasks: list[Task], size: int = 64) -> list[list[tuple[int, Task]]]:
+    """Tasks grouped for `run_batch`: same track, model, solver and track law, at most
+    ``size`` each, with their positions in ``tasks`` (`in_order` puts results back)."""
+    groups: dict = {}
+    for i, t in enumerate(tasks):
+        key = (t.track, t.run.model, t.run.solver, t.run.nonlinear)
+        groups.setdefault(key, []).append((i, t))
+    return [g[j : j + size] for g in groups.values() for j in range(0, len(g), size)]
+
+
+def run_batch(batch: list[tuple[int, Task]]) -> list[tuple[int, dict]]:
+    """Simulate a batch of tasks side by side (`trackdyn.simulation.simulate_batch`).
+
+    Each result is the one `run_task` gives for the task alone, with the task's position.
+    Never raises: a failure comes back as ``{"labels", "error"}`` and the others finish.
+    """
+    from trackdyn.simulation import simulate_batch
     from trackdyn.vehicle.parameters import load_vehicle
 
-    try:
-        vehicle = load_vehicle(task.vehicle, **task.overrides)
-        r = task.run
-        lin = _linearised(task.track, vehicle.static_wheel_load, r.delta, r.extrapolate)
-        ds = simulate(vehicle, lin, r)
-    except Exception as exc:  # noqa: BLE001 - reported with the run's labels, others go on
-        return {"labels": task.labels, "error": error_message(exc)}
+    results: dict[int, dict] = {}
+    ready = []
+    for i, task in batch:
+        try:
+            vehicle = load_vehicle(task.vehicle, **task.overrides)
+            r = task.run
+            lin = _linearised(task.track, vehicle.static_wheel_load, r.delta, r.extrapolate)
+            ready.append((i, task, vehicle, lin))
+        except Exception as exc:  # noqa: BLE001 - reported with the run's labels, others go on
+            results[i] = {"labels": task.labels, "error": error_message(exc)}
+    if ready:
+        index, tasks, vehicles, lins = map(list, zip(*ready, strict=True))
+        solved = simulate_batch(vehicles, lins, [t.run for t in tasks])
+        for i, task, ds in zip(index, tasks, solved, strict=True):
+            if isinstance(ds, Exception):
+                results[i] = {"labels": task.labels, "error": error_message(ds)}
+            else:
+                results[i] = {"labels": task.labels, **_statistics(ds)}
+    return [(i, results[i]) for i, _ in batch]
+
+
+def in_order(batch_results: list[list[tuple[int, dict]]]) -> list[dict]:
+    """The results of `run_batch` over `batches` in the order of the tasks."""
+    return [r for _, r in sorted((x for b in batch_results for x in b), key=lambda x: x[0])]
+
+
+def _statistics(ds) -> dict:
+    """Statistics and wheel-load spectrum of one run."""
+    from trackdyn.results import summary
+
     table = summary(ds)
     dyn = ds.wheel_load.values - ds.attrs["static_wheel_load_N"]
     fs = 1.0 / float(ds.time[1] - ds.time[0])
@@ -89,7 +133,7 @@ def run_task(task: Task) -> dict:
         "body_bounce_acc_rms_m_per_s2": float(table["body_bounce_acc_rms_m_per_s2"].iloc[0]),
         "dominant_frequency_Hz": float(table["dominant_frequency_Hz"].iloc[0]),
     }
-    return {"labels": task.labels, "row": row, "psd": psd}
+    return {"row": row, "psd": psd}
 
 
 def gather(results: list[dict]):

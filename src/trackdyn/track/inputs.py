@@ -1,0 +1,187 @@
+"""What the solvers see of the track: the input under each contact of a moving vehicle.
+
+A solver asks a `TrackInput` for the track under the model's contacts at the vehicle-centre
+positions of a block of steps, ``inputs(centre) -> (k, r, table)``:
+
+* ``k`` (positions, contacts) [N/m]: contact stiffness (sum over the contact's axles);
+* ``r`` (positions, contacts) [m]: the input the contact deflection is measured from
+  (the loaded profile, mean over the axles; the unloaded space curve for tabulated
+  contacts), positive down;
+* ``table`` (positions, contacts, ``grid.size``) [N]: the wheel load against deflection
+  from ``r`` on the deflection ``grid`` for tabulated (nonlinear) contacts; zero rows when
+  the contacts are linear, ``f = k (Dc q - r)``.
+
+`ContactInput` is the input of a `LinearisedTrack` (5.4.3: stiffness summed, loaded
+profile averaged over a bogie side's axles; or the bicubic surface of 5.14). A new input
+(a dipped joint, a measured stiffness trace) is another class with the same ``grid``,
+``__call__`` and ``linear``; or, where it is a change of the track itself, a function from
+a `LinearisedTrack` to a `LinearisedTrack` (`trackdyn.track.excitation`).
+
+References
+----------
+Fröhling, R.D. (1997). Deterioration of railway track due to dynamic vehicle loading and
+spatially varying track stiffness. PhD thesis, University of Pretoria, §5.2, §5.4.3, eq 5.14.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+import numpy as np
+from numba import njit
+from scipy.interpolate import CubicSpline
+
+from trackdyn.errors import TrackdynInputError
+from trackdyn.track.track import RAILS, LinearisedTrack, load_surface
+
+TABLE_POINTS = 96
+"""Deflection points of the per-step load table of the nonlinear contact."""
+
+
+class TrackInput(Protocol):
+    """The track under a model's contacts at given vehicle-centre positions.
+
+    Attributes
+    ----------
+    grid : ndarray
+        Deflection grid of ``table`` [m], evenly spaced; empty for linear contacts.
+    """
+
+    grid: np.ndarray
+
+    def __call__(self, centre: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(k [N/m], r [m], table [N])`` at the vehicle-centre positions ``centre`` [m]."""
+
+    def linear(self, centre: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Linear contact stiffness [N/m] and loaded profile [m] at ``centre`` [m]: the
+        static state of tabulated contacts starts its Newton iteration from them."""
+
+
+@njit(cache=True, inline="always")
+def _interval(x, xp, j):
+    """``j`` with ``xp[j] <= x < xp[j+1]`` searched from the guess ``j`` (-1 / xp.size
+    outside; xp.size - 1 at the last point), as numpy's ``interp`` finds it."""
+    n = xp.size
+    if x < xp[0]:
+        return -1
+    if x > xp[n - 1]:
+        return n
+    if x == xp[n - 1]:
+        return n - 1
+    if j < 0 or j >= n - 1 or x < xp[j]:
+        j = 0
+    while x >= xp[j + 1]:
+        j += 1
+    return j
+
+
+@njit(cache=True, inline="always")
+def _interp(x, xp, fp, j):
+    """``numpy.interp(x, xp, fp)`` operation for operation, in interval ``j``."""
+    if j < 0:
+        return fp[0]
+    if j >= xp.size - 1 or xp[j] == x:
+        return fp[min(j, xp.size - 1)]
+    slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])
+    return slope * (x - xp[j]) + fp[j]
+
+
+@njit(cache=True)
+def _sample(centre, axles, pos, k2, ys, knots, coef, k_out, r_out):
+    """Add every axle's stiffness and weighted loaded profile into ``k_out``, ``r_out``.
+
+    ``axles`` rows: offset ahead of the centre [m], contact, rail, weight (1 / axles of
+    the contact). The profile is the cubic spline ``coef`` on ``knots`` per rail, evaluated
+    as scipy's ``PPoly`` does; the operations and their order are those of
+    `LinearisedTrack.sample` followed by the sums of `ContactInput`, so the result is the
+    same to the bit.
+    """
+    for a in range(axles.shape[0]):
+        c = int(axles[a, 1])
+        rail = int(axles[a, 2])
+        j = 0
+        g = 0
+        for s in range(centre.size):
+            x = centre[s] + axles[a, 0]
+            j = _interval(x, pos, j)
+            gi = _interval(x, knots, g)
+            g = min(max(gi, 0), knots.size - 2)
+            d = x - knots[g]
+            z = 1.0
+            spline = 0.0
+            for p in range(4):
+                spline = spline + coef[rail, 3 - p, g] * z
+                z *= d
+            k_out[s, c] += _interp(x, pos, k2[rail], j)
+            r_out[s, c] += (spline + _interp(x, pos, ys[rail], j)) * axles[a, 3]
+
+
+class ContactInput:
+    """The `TrackInput` of a `LinearisedTrack` for a model's contacts.
+
+    Parameters
+    ----------
+    model : Model
+        Vehicle model (its ``contact_rails`` and ``contact_axles``).
+    lin : LinearisedTrack
+        The track, linearised about the vehicle's static wheel load.
+    nonlinear : bool
+        Tabulated contacts from the bicubic surface of 5.14 (single-wheel contacts only).
+    """
+
+    def __init__(self, model, lin: LinearisedTrack, nonlinear: bool = False):
+        self.lin, self.nonlinear = lin, nonlinear
+        self.rails = model.contact_rails
+        self.first_axles = [a[0] for a in model.contact_axles]
+        self.axles = np.array(
+            [
+                [x, c, RAILS.index(rail), 1.0 / len(axles)]
+                for c, (rail, axles) in enumerate(
+                    zip(model.contact_rails, model.contact_axles, strict=True)
+                )
+                for x in axles
+            ]
+        )
+        g = lin.track.geometry
+        splines = [CubicSpline(g.distance, g.profile(r)) for r in RAILS]
+        self.coef = np.ascontiguousarray([s.c for s in splines])
+        self.grid = np.empty(0)
+        if nonlinear:
+            if any(len(a) != 1 for a in model.contact_axles):
+                raise TrackdynInputError(
+                    "the nonlinear track (5.14) is available for single-wheel contacts "
+                    "(the 2-DOF model); bogie models use the linearised track"
+                )
+            top = max(c.deflection[-1] for r in RAILS for c in getattr(lin.track.supports, r))
+            self.grid = np.linspace(0.0, 1.5 * top, TABLE_POINTS)
+            self.surface = {r: load_surface(lin.track, r, self.grid) for r in set(self.rails)}
+
+    def linear(self, centre: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Contact stiffness [N/m] and loaded profile [m] of the linearised track."""
+        centre = np.asarray(centre, dtype=float)
+        lin = self.lin
+        lo, hi = lin.track.extent
+        if centre.size:
+            x0, x1 = centre.min() + self.axles[:, 0].min(), centre.max() + self.axles[:, 0].max()
+            if x0 < lo - 1e-9 or x1 > hi + 1e-9:
+                raise TrackdynInputError(
+                    f"position {x0:.2f}-{x1:.2f} m is outside the track ({lo:.2f}-{hi:.2f} m)"
+                )
+        k, r = np.zeros((centre.size, len(self.rails))), np.zeros((centre.size, len(self.rails)))
+        knots = lin.track.geometry.distance
+        _sample(
+            centre, self.axles, lin.track.supports.position, lin.k2, lin.ys, knots, self.coef, k, r
+        )
+        return k, r
+
+    def __call__(self, centre: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """See `TrackInput`."""
+        k, r = self.linear(centre)
+        if not self.nonlinear:
+            return k, r, np.zeros((0, len(self.rails), 0))
+        table = np.zeros((centre.size, len(self.rails), self.grid.size))
+        for c, (rail, offset) in enumerate(zip(self.rails, self.first_axles, strict=True)):
+            x = centre + offset
+            r[:, c] = self.lin.track.geometry.at(rail, x)
+            table[:, c] = self.surface[rail](x)
+        return k, r, table
