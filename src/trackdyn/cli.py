@@ -173,15 +173,14 @@ def study(
     ] = None,
 ):
     """Run a study (scenario matrix, parameter variation or speed sweep) on Dask."""
-    from trackdyn.parallel import run_tasks
     from trackdyn.studies.outputs import write_study
-    from trackdyn.studies.runner import gather, run_task
+    from trackdyn.studies.runner import gather, run_study
     from trackdyn.studies.scenarios import load_study, tasks
 
     spec, base = load_study(study_file)
     runs = tasks(spec, base)
     with output_folder(out, "study", overwrite) as stage:
-        results = run_tasks(runs, run_task, workers=workers, scheduler=scheduler, progress=True)
+        results = run_study(runs, workers=workers, scheduler=scheduler, progress=True)
         table, ds = gather(results)
         ds.attrs.update(kind=spec.kind, model=spec.run.model)
         write_study(table, ds, spec, stage)

@@ -37,9 +37,12 @@ def _client(workers: int | None, scheduler: str | None):
     # Two Dask defaults made a run (1 km, 11-DOF) take 0.56-0.78 s in a worker instead of
     # 0.38 s: MALLOC_TRIM_THRESHOLD_ turns off glibc's adaptive mmap threshold, so every
     # large array is mmapped and page-faulted afresh; and the statistical profiler takes
-    # the GIL every 10 ms. Local workers run with neither.
+    # the GIL every 10 ms. Local workers run with neither. Each worker process is one
+    # core's worth of work: numba's parallel batch loop runs on one thread there, as
+    # Dask already sets for the BLAS libraries.
     settings = {
         "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
+        "distributed.nanny.pre-spawn-environ.NUMBA_NUM_THREADS": 1,
         "distributed.worker.profile.enabled": False,
     }
     with dask.config.set(settings):

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass, field
+from os import cpu_count
 
 import numpy as np
 import pandas as pd
@@ -114,6 +115,33 @@ def run_batch(batch: list[tuple[int, Task]]) -> list[tuple[int, dict]]:
 def in_order(batch_results: list[list[tuple[int, dict]]]) -> list[dict]:
     """The results of `run_batch` over `batches` in the order of the tasks."""
     return [r for _, r in sorted((x for b in batch_results for x in b), key=lambda x: x[0])]
+
+
+def run_study(tasks: list[Task], *, workers=None, scheduler=None, progress=False) -> list[dict]:
+    """Run a study's tasks in batches spread over the workers; results in task order.
+
+    Batches hold at most 64 runs and are made small enough that every worker gets one.
+
+    Parameters
+    ----------
+    tasks : list of Task
+        The runs.
+    workers : int, optional
+        Worker processes (default one per core; 1 runs in this process).
+    scheduler : str, optional
+        Address of a running Dask scheduler.
+    progress : bool
+        Show a progress bar counting finished batches.
+    """
+    from trackdyn.parallel import run_tasks
+
+    share = -(-len(tasks) // (1 if workers == 1 and not scheduler else workers or cpu_count()))
+    groups = batches(tasks, size=max(1, min(64, share)))
+    done = run_tasks(
+        groups, run_batch, workers=workers, scheduler=scheduler, progress=progress,
+        label="batches of runs",
+    )  # fmt: skip
+    return in_order(done)
 
 
 def _statistics(ds) -> dict:
