@@ -114,3 +114,18 @@ def test_batch_gives_each_run_its_own_results(lin):
     with pytest.raises(TrackdynInputError) as alone:
         simulate(V, lin, options[4], newton_max_iter=1)
     assert str(failing[1]) == str(alone.value)
+
+
+@pytest.mark.parametrize(
+    ("args", "match"),
+    [
+        (("loaded", "lin", None), "vehicle must be a Vehicle .* got str 'loaded'"),
+        (("V", None, None), "track must be a Track .* got NoneType"),
+        (("V", "lin", {"speed_kmh": 60}), "options must be RunOptions .* got dict"),
+    ],
+)
+def test_api_arguments_of_the_wrong_kind(lin, args, match):
+    given = {"V": V, "lin": lin}
+    vehicle, track, options = (given.get(a, a) if isinstance(a, str) else a for a in args)
+    with pytest.raises(TrackdynInputError, match=match):
+        simulate(vehicle, track, options)

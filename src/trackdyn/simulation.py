@@ -106,6 +106,7 @@ def simulate_batch(
     """
     if not isinstance(tracks, list | tuple):
         tracks = [tracks] * len(vehicles)
+    _check_types(vehicles, tracks, options)
     if not len(vehicles) == len(tracks) == len(options):
         raise TrackdynInputError(
             f"simulate_batch: {len(vehicles)} vehicles, {len(tracks)} tracks and "
@@ -132,6 +133,21 @@ def simulate_batch(
                 ok = not isinstance(out, Exception)
                 results[i] = _dataset(made[i], vehicles[i], options[i], out) if ok else out
     return results
+
+
+def _check_types(vehicles, tracks, options) -> None:
+    """Refuse arguments of the wrong kind with a message naming the argument."""
+    kinds = (
+        ("vehicle", vehicles, Vehicle, "a Vehicle (trackdyn.load_vehicle)"),
+        ("track", tracks, Track | LinearisedTrack, "a Track (trackdyn.load_track)"),
+        ("options", options, RunOptions, "RunOptions (trackdyn.RunOptions)"),
+    )
+    for name, values, kind, expected in kinds:
+        for v in values:
+            if not isinstance(v, kind):
+                raise TrackdynInputError(
+                    f"simulate: {name} must be {expected}, got {type(v).__name__} {v!r:.40}"
+                )
 
 
 def _dataset(p: Problem, vehicle, o: RunOptions, out) -> xr.Dataset:
@@ -185,6 +201,8 @@ def simulate(
         See `trackdyn.results.make_dataset`.
     """
     o = RunOptions() if options is None else options
+    if isinstance(vehicle, list | tuple):
+        raise TrackdynInputError("simulate: vehicle must be one Vehicle; for many, simulate_batch")
     flags = dict(start=start, end=end, progress=progress, newton_max_iter=newton_max_iter)
     (result,) = simulate_batch([vehicle], [track], [o], **flags)
     if isinstance(result, Exception):

@@ -149,8 +149,9 @@ class ContactInput:
         if nonlinear:
             if any(len(a) != 1 for a in model.contact_axles):
                 raise TrackdynInputError(
-                    "the nonlinear track (5.14) is available for single-wheel contacts "
-                    "(the 2-DOF model); bogie models use the linearised track"
+                    f"the nonlinear track (5.14) needs a contact per wheel (models 2dof, "
+                    f"2dof-wedge, full); {model.name} uses the bogie approximation and the "
+                    "linearised track"
                 )
             top = max(c.deflection[-1] for r in RAILS for c in getattr(lin.track.supports, r))
             self.grid = np.linspace(0.0, 1.5 * top, TABLE_POINTS)
