@@ -24,17 +24,16 @@ from trackdyn.options import RunOptions
 from trackdyn.simulation import simulate, simulate_batch
 from trackdyn.solver.central import advance, step_matrices
 from trackdyn.track.synthetic import example_track
-from trackdyn.vehicle.models import build_model
+from trackdyn.vehicle.models import MODELS, build_model
 from trackdyn.vehicle.parameters import load_vehicle
-
-MODELS = ("2dof", "2dof-wedge", "4dof", "7dof", "11dof")
 
 
 def kernel_args(model, n_steps, dt, rng, store_every=1):
     """Arguments of `advance` for ``n_steps`` of realistic input (8 Hz, 1 mm)."""
     m = model
     nc, n, nw = len(m.contact_names), len(m.dof_names), len(m.wedge_names)
-    k = np.full((n_steps, nc), 2e8 if nc > 1 else 1e8)
+    # 100 kN/mm per wheel: a bogie contact stands for two wheels
+    k = np.array([1e8 * len(a) for a in m.contact_axles]) * np.ones((n_steps, 1))
     r = 1e-3 * np.sin(np.arange(n_steps)[:, None] * dt * 2 * np.pi * 8 + rng.random(nc))
     rows = (n_steps - 1) // store_every + 1
     out = [np.empty((rows, w)) for w in (n, n, n, nc, nw, nw, nc, nc)]
