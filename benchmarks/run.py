@@ -80,7 +80,7 @@ from trackdyn.vehicle.parameters import load_vehicle
 v = load_vehicle("loaded")
 lin = example_track().linearise(v.static_wheel_load)
 t = time.perf_counter()
-simulate(v, lin, RunOptions(), end=30.0)
+simulate(v, lin, RunOptions(end_m=30.0))
 print(time.perf_counter() - t)
 """
 
@@ -107,10 +107,10 @@ def batch_rate(vehicle, lin, n_runs, length):
         type(vehicle)(**{**base, "kp": base["kp"] * (0.8 + 0.4 * i / max(n_runs - 1, 1))})
         for i in range(n_runs)
     ]
-    options = [RunOptions(store_every=10)] * n_runs
-    simulate_batch(vehicles[:1], lin, options[:1], end=30.0)
+    options = [RunOptions(store_every=10, end_m=length)] * n_runs
+    simulate_batch(vehicles[:1], lin, [RunOptions(store_every=10, end_m=30.0)])
     t = time.perf_counter()
-    results = simulate_batch(vehicles, lin, options, end=length)
+    results = simulate_batch(vehicles, lin, options)
     elapsed = time.perf_counter() - t
     assert not any(isinstance(r, Exception) for r in results)
     return n_runs / elapsed
@@ -136,10 +136,10 @@ def main():
         t_fast = time_kernel(advance, model, steps, dt, 5)
         t_fast10 = time_kernel(advance, model, steps, dt, 5, store_every=10)
         t_py = time_kernel(advance.py_func, model, py_steps, dt, 1)
-        simulate(vehicle, lin, RunOptions(model=name), end=50.0)  # warm caches
+        simulate(vehicle, lin, RunOptions(model=name, end_m=50.0))  # warm caches
         tracemalloc.start()
         t = time.perf_counter()
-        ds = simulate(vehicle, lin, RunOptions(model=name, store_every=1), end=length)
+        ds = simulate(vehicle, lin, RunOptions(model=name, store_every=1, end_m=length))
         elapsed = time.perf_counter() - t
         peak = tracemalloc.get_traced_memory()[1] / 2**20
         tracemalloc.stop()

@@ -60,7 +60,7 @@ def test_bad_options(lin, options, match):
 
 def test_track_shorter_than_the_vehicle_is_refused(lin):
     with pytest.raises(TrackdynInputError, match="shorter than the vehicle's path"):
-        simulate(V, lin, RunOptions(speed_kmh=72.0), start=70.0)
+        simulate(V, lin, RunOptions(speed_kmh=72.0, start_m=70.0))
 
 
 @pytest.mark.parametrize("solver", ["central", "reference"])

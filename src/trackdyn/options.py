@@ -14,6 +14,8 @@ store_every = 10       # optional; default: one stored step per millisecond
 delta = 0.3            # dynamic wheel load increment of the linearisation
 extrapolate = false    # true: allow Ps ± ΔP beyond the measured curves
 nonlinear = false      # true: the bicubic track of 5.14 (single-wheel contacts)
+# start_m = 100         # part of the track to run over [m]; default the whole track
+# end_m = 400
 solver = "central"     # "reference": scipy DOP853 at tight tolerance, to check a case
 ```
 """
@@ -63,6 +65,9 @@ class RunOptions(Strict):
     nonlinear : bool
         Take the track force from the bicubic surface of 5.14 instead of the linearised
         track (models whose contacts each stand for one wheel).
+    start_m, end_m : float, optional
+        Part of the track to run over [m]: the rear axle starts at ``start_m``, the run
+        ends when the front axle reaches ``end_m``; default the whole track.
     solver : {"central", "reference"}
         The compiled central-difference scheme, or scipy's DOP853 at tight tolerance
         (slow; to check a case), see `trackdyn.solver`.
@@ -77,6 +82,8 @@ class RunOptions(Strict):
     delta: float = Field(0.3, gt=0, lt=1)
     extrapolate: bool = False
     nonlinear: bool = False
+    start_m: float | None = None
+    end_m: float | None = None
     solver: Literal["central", "reference"] = "central"
 
     @field_validator("model")

@@ -40,7 +40,7 @@ def time_step(model, lin: LinearisedTrack, speed: float) -> tuple[float, float, 
     return dt, 2.0 / omega, omega
 
 
-def _problem(vehicle, track, o: RunOptions, start, end) -> Problem:
+def _problem(vehicle, track, o: RunOptions) -> Problem:
     """The solver's view of one run: model, track input, path, time step and storage."""
     speed = o.speed
     m = build_model(o.model, vehicle)
@@ -51,8 +51,8 @@ def _problem(vehicle, track, o: RunOptions, start, end) -> Problem:
     )
     lo, hi = lin.track.extent
     rear, front = m.reach
-    start = lo if start is None else max(float(start), lo)
-    end = hi if end is None else min(float(end), hi)
+    start = lo if o.start_m is None else max(o.start_m, lo)
+    end = hi if o.end_m is None else min(o.end_m, hi)
     c0, c1 = start - rear, end - front
     if c1 <= c0:
         raise TrackdynInputError(
@@ -76,8 +76,6 @@ def simulate_batch(
     tracks,
     options: list[RunOptions],
     *,
-    start: float | None = None,
-    end: float | None = None,
     progress: bool = False,
     newton_max_iter: int = 50,
 ) -> list:
@@ -96,7 +94,7 @@ def simulate_batch(
         The track, or one per run (e.g. linearised about each vehicle's static load).
     options : list of RunOptions
         One per run: model, speed, time step, storage, track law, solver.
-    start, end, progress, newton_max_iter
+    progress, newton_max_iter
         As for `simulate`.
 
     Returns
@@ -115,7 +113,7 @@ def simulate_batch(
     made: list = []
     for v, trk, o in zip(vehicles, tracks, options, strict=True):
         try:
-            made.append(_problem(v, trk, o, start, end))
+            made.append(_problem(v, trk, o))
         except TrackdynInputError as exc:
             made.append(exc)
     results: list = list(made)
@@ -162,16 +160,15 @@ def simulate(
     track: Track | LinearisedTrack,
     options: RunOptions | None = None,
     *,
-    start: float | None = None,
-    end: float | None = None,
     progress: bool = False,
     newton_max_iter: int = 50,
 ) -> xr.Dataset:
     """Run a vehicle model over a track at constant speed.
 
-    The vehicle starts with its rearmost axle at ``start`` in the static equilibrium of
-    that position, moving with the track (its velocity is that of the static equilibrium
-    carried along the track), and runs until its foremost axle reaches ``end``.
+    The vehicle starts with its rearmost axle at the options' ``start_m`` (default: the
+    start of the track) in the static equilibrium of that position, moving with the track
+    (its velocity is that of the static equilibrium carried along the track), and runs
+    until its foremost axle reaches ``end_m`` (default: the end of the track).
 
     Parameters
     ----------
@@ -188,8 +185,6 @@ def simulate(
         sample interval of travel per step; a step beyond the stability limit
         ``2 / ω_max`` of the explicit scheme is refused. Without ``store_every`` one step
         is kept about every `OUTPUT_STEP` seconds.
-    start, end : float, optional
-        Part of the track to run over [m]; default the whole track.
     progress : bool
         Show a progress bar.
     newton_max_iter : int
@@ -203,7 +198,7 @@ def simulate(
     o = RunOptions() if options is None else options
     if isinstance(vehicle, list | tuple):
         raise TrackdynInputError("simulate: vehicle must be one Vehicle; for many, simulate_batch")
-    flags = dict(start=start, end=end, progress=progress, newton_max_iter=newton_max_iter)
+    flags = dict(progress=progress, newton_max_iter=newton_max_iter)
     (result,) = simulate_batch([vehicle], [track], [o], **flags)
     if isinstance(result, Exception):
         raise result

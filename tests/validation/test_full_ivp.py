@@ -160,10 +160,12 @@ STATE_TO_MODEL = (
 def case():
     v = load_vehicle("loaded")
     lin = irregular_track().linearise(v.static_wheel_load)
-    ds = simulate(v, lin, RunOptions(model="full", speed_kmh=SPEED * 3.6, store_every=1), end=END)
+    ds = simulate(v, lin, RunOptions(model="full", speed_kmh=SPEED * 3.6, store_every=1, end_m=END))
     dt = ds.attrs["time_step_s"]
     fine = simulate(
-        v, lin, RunOptions(model="full", speed_kmh=SPEED * 3.6, dt_s=dt / 4, store_every=4), end=END
+        v,
+        lin,
+        RunOptions(model="full", speed_kmh=SPEED * 3.6, dt_s=dt / 4, store_every=4, end_m=END),
     )
     axles = {i: x + lam for _, x, pairs in layout(v) for i, lam in pairs}
     c0 = v.b_cc + v.a  # the rearmost axle starts at the track start

@@ -109,8 +109,9 @@ def test_steady_state_wheel_load_matches_transfer_function(case):
     ds = simulate(
         VEHICLE,
         track,
-        RunOptions(model="2dof", speed_kmh=SPEED * 3.6, store_every=1),
-        end=SPEED * duration + 2 * offset,
+        RunOptions(
+            model="2dof", speed_kmh=SPEED * 3.6, store_every=1, end_m=SPEED * duration + 2 * offset
+        ),
     )
 
     t = ds.time.values
