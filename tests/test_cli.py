@@ -9,6 +9,7 @@ from typer.testing import CliRunner
 from trackdyn.cli import app
 from trackdyn.io import write_geometry, write_supports
 from trackdyn.track.synthetic import synthetic_track
+from trackdyn.vehicle.parameters import load_vehicle
 
 runner = CliRunner()
 
@@ -70,7 +71,7 @@ def test_run_command_with_scenario(short_track, tmp_path):
         '[vehicle]\npreset = "empty"\n'
         f'[track]\ngeometry = "{short_track / "geometry.csv"}"\n'
         f'supports = "{short_track / "supports.csv"}"\n'
-        '[run]\nmodel = "7dof"\nspeed_kmh = 40\nstore_every = 4\n'
+        '[run]\nmodel = "7dof"\nspeed_kmh = 40\nstore_every = 4\nstart_m = 20\nend_m = 250\n'
     )
     out = tmp_path / "out"
     result = runner.invoke(app, ["run", str(scenario), "--out", str(out)])
@@ -85,6 +86,12 @@ def test_run_command_with_scenario(short_track, tmp_path):
     ds = xr.load_dataset(out / "results.nc")
     assert list(ds.contact.values) == ["FL", "FR", "BL", "BR"]
     assert ds.attrs["model"] == "7dof" and ds.attrs["vehicle"].startswith("empty")
+    # rear axle from 20 m, front axle to 250 m: the centre covers 250 - 20 - axle span,
+    # the axles 2 (b_cc + a) apart (bogie centres ± half a wheelbase)
+    v = load_vehicle("empty")
+    span = 2 * (v.b_cc + v.a)
+    travelled = float(ds.distance[-1] - ds.distance[0])
+    assert 230.0 - span - 0.5 < travelled <= 230.0 - span
     # 40 km/h and every 4th step stored, as the scenario says
     assert ds.attrs["speed_m_per_s"] == pytest.approx(40 / 3.6, rel=1e-12)
     step = float(ds.time[1] - ds.time[0])
