@@ -1,4 +1,13 @@
-"""`simulate`: a vehicle model running over a track at constant speed."""
+"""`simulate`: a vehicle model running over a track at constant speed.
+
+Builds the model, linearises the track (5.9-5.11), picks a stable time step, starts the
+vehicle on the static path and hands the run to a solver (`trackdyn.solver`).
+
+References
+----------
+Fröhling, R.D. (1997). Deterioration of railway track due to dynamic vehicle loading and
+spatially varying track stiffness. PhD thesis, University of Pretoria, §5.2-5.4.
+"""
 
 from __future__ import annotations
 

@@ -17,6 +17,15 @@ point solves the linear system of the stick/slip states there. The solution is e
 soon as the states it lands in are the ones it assumed, so the iteration stops then; it
 starts from the previous step's states and usually needs one solve. The matrices
 ``(I + H diag(C_slope·stick))^-1`` of all ``2^nw`` state combinations are formed once.
+
+References
+----------
+Fröhling, R.D. (1997). Deterioration of railway track due to dynamic vehicle loading and
+spatially varying track stiffness. PhD thesis, University of Pretoria, §5.4, eqs 5.15-5.18 (central
+differences with Newton-Raphson), 5.30-5.33 (friction wedges).
+
+Bathe, K.J. (1996). Finite Element Procedures. Prentice Hall, Englewood Cliffs, §9.2.1
+(the central difference method and its stability limit Δt < 2/ω_max).
 """
 
 from __future__ import annotations

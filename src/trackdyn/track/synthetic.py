@@ -5,6 +5,11 @@ estimate, not a calibrated one: each sleeper's curve is
 ``y(P) = P / k + g (1 - exp(-P / P0))``, a linear track stiffness ``k`` [N/m] behind a
 seating range of gap ``g`` [m] that closes by about the seed's 32.5 kN seating load
 (``P0 = 32.5 kN / 3``).
+
+References
+----------
+Fröhling, R.D. (1997). Deterioration of railway track due to dynamic vehicle loading and
+spatially varying track stiffness. PhD thesis, University of Pretoria, §5.2 (the seating load of voided sleepers).
 """
 
 from __future__ import annotations
