@@ -6,7 +6,8 @@ vehicle on the static path and hands the run to a solver (`trackdyn.solver`).
 References
 ----------
 Fröhling, R.D. (1997). Deterioration of railway track due to dynamic vehicle loading and
-spatially varying track stiffness. PhD thesis, University of Pretoria, §5.2-5.4.
+spatially varying track stiffness. PhD thesis, University of Pretoria,
+§5.2-5.4.
 """
 
 from __future__ import annotations

@@ -21,7 +21,8 @@ starts from the previous step's states and usually needs one solve. The matrices
 References
 ----------
 Fröhling, R.D. (1997). Deterioration of railway track due to dynamic vehicle loading and
-spatially varying track stiffness. PhD thesis, University of Pretoria, §5.4, eqs 5.15-5.18 (central
+spatially varying track stiffness. PhD thesis, University of Pretoria,
+§5.4, eqs 5.15-5.18 (central
 differences with Newton-Raphson), 5.30-5.33 (friction wedges).
 
 Bathe, K.J. (1996). Finite Element Procedures. Prentice Hall, Englewood Cliffs, §9.2.1

@@ -20,7 +20,8 @@ speeds_kmh = [20, 40, 60, 80]
 References
 ----------
 Fröhling, R.D. (1997). Deterioration of railway track due to dynamic vehicle loading and
-spatially varying track stiffness. PhD thesis, University of Pretoria, §5.4.1 (empty and loaded, low and high
+spatially varying track stiffness. PhD thesis, University of Pretoria,
+§5.4.1 (empty and loaded, low and high
 damping, excitation cases i-iv) and §5.4.3 (the parameter variation analysis).
 """
 

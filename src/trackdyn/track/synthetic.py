@@ -9,7 +9,8 @@ seating range of gap ``g`` [m] that closes by about the seed's 32.5 kN seating l
 References
 ----------
 Fröhling, R.D. (1997). Deterioration of railway track due to dynamic vehicle loading and
-spatially varying track stiffness. PhD thesis, University of Pretoria, §5.2 (the seating load of voided sleepers).
+spatially varying track stiffness. PhD thesis, University of Pretoria,
+§5.2 (the seating load of voided sleepers).
 """
 
 from __future__ import annotations

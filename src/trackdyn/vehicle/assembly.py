@@ -10,7 +10,8 @@ suspension moves ``y1 + b θ - b_cc α``). An element between points P (on body 
 References
 ----------
 Fröhling, R.D. (1997). Deterioration of railway track due to dynamic vehicle loading and
-spatially varying track stiffness. PhD thesis, University of Pretoria, §5.4, eqs 5.19-5.33 (the 11-DOF model the
+spatially varying track stiffness. PhD thesis, University of Pretoria,
+§5.4, eqs 5.19-5.33 (the 11-DOF model the
 assembled matrices reproduce term by term).
 """
 

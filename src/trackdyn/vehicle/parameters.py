@@ -3,7 +3,8 @@
 References
 ----------
 Fröhling, R.D. (1997). Deterioration of railway track due to dynamic vehicle loading and
-spatially varying track stiffness. PhD thesis, University of Pretoria, §5.4 (the symbols of eqs 5.19-5.33).
+spatially varying track stiffness. PhD thesis, University of Pretoria,
+§5.4 (the symbols of eqs 5.19-5.33).
 """
 
 from __future__ import annotations
