@@ -115,8 +115,9 @@ def track(
         raise TrackdynInputError("give both --geometry and --supports, or neither for the example")
     section = rail_section(rail)
     with output_folder(out, "track", overwrite) as stage:
-        trk = load_track(geometry, supports)
-        lin = trk.linearise(wheel_load_kN * 1e3, delta, extrapolate=extrapolate)
+        with console.status("reading and linearising the track"):
+            trk = load_track(geometry, supports)
+            lin = trk.linearise(wheel_load_kN * 1e3, delta, extrapolate=extrapolate)
         table = write_track_outputs(lin, section, stage)
     _show(table, f"Track summary ({trk.geometry.where})")
     console.print(f"wrote track.nc and 3 figures to {out}")
@@ -143,7 +144,8 @@ def run(
     spec, base = load_scenario(scenario)
     vehicle = spec.vehicle.load(base)
     with output_folder(out, "run", overwrite) as stage:
-        trk = spec.track.load(base)
+        with console.status("reading the track"):
+            trk = spec.track.load(base)
         with _named(scenario):
             ds = simulate(vehicle, trk, spec.run, progress=True)
         table = summary(ds)
