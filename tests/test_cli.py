@@ -6,7 +6,8 @@ import pytest
 import xarray as xr
 from typer.testing import CliRunner
 
-from trackdyn.cli import app
+from trackdyn import cli
+from trackdyn.cli import app, header
 from trackdyn.io import write_geometry, write_supports
 from trackdyn.track.synthetic import synthetic_track
 from trackdyn.vehicle.parameters import load_vehicle
@@ -29,6 +30,23 @@ def test_version_and_help():
     assert result.exit_code == 0 and result.stdout.startswith("trackdyn ")
     result = runner.invoke(app, ["--help"])
     assert result.exit_code == 0 and "track" in result.stdout and "run" in result.stdout
+    result = runner.invoke(app, ["track", "--help"])
+    assert result.exit_code == 0 and "Static wheel load Ps [kN]" in result.stdout
+
+
+@pytest.mark.parametrize(
+    ("column", "expected"),
+    [
+        ("dyn_load_max_kN", "ΔP max\n[kN]"),
+        ("k2_mean_kN_per_mm", "k2 mean\n[kN/mm]"),
+        ("body_bounce_acc_rms_m_per_s2", "bounce RMS\n[m/s²]"),
+        ("ballast_mm", "ballast\n[mm]"),
+        ("contact", "contact"),
+        ("factor_kp", "factor_kp"),
+    ],
+)
+def test_table_headers_are_short_with_units(column, expected):
+    assert header(column) == expected
 
 
 def test_track_command_on_user_files(short_track, tmp_path):
@@ -220,3 +238,17 @@ def test_output_folder_belongs_to_one_command(tmp_path, short_track):
     assert runner.invoke(app, args).exit_code == 0
     names = {p.name for p in out.iterdir()}
     assert "track.nc" not in names and {"study.csv", "notes.txt"} <= names
+
+
+def test_study_table_fits_80_columns_without_cutting_headers(monkeypatch):
+    columns = ["vehicle", "damping", "case", "dyn_load_max_kN", "dyn_load_min_kN"]
+    columns += ["dyn_load_sd_kN", "secondary_max_mm", "body_bounce_acc_rms_m_per_s2"]
+    table = pd.DataFrame(
+        [["loaded", "high", "iv", 25.0, -25.2, 6.65, 8.23, 0.543]], columns=columns
+    )
+    table["dominant_frequency_Hz"] = 1.52
+    monkeypatch.setattr(cli, "console", cli.Console(width=80, record=True))
+    cli._show(table, "matrix")
+    text = cli.console.export_text()
+    assert "…" not in text and "vehicle" in text and "damping" in text and "[m/s²]" in text
+    assert max(len(line) for line in text.splitlines()) <= 80

@@ -9,8 +9,10 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
+from rich import box
 from rich.console import Console
 from rich.table import Table
+from rich.text import Text
 
 from trackdyn import __version__
 from trackdyn.errors import TrackdynInputError
@@ -21,6 +23,7 @@ app = typer.Typer(
     add_completion=False,
     no_args_is_help=True,
     pretty_exceptions_enable=False,
+    rich_markup_mode=None,
     help="Railway vehicle/track vertical dynamics and track deterioration prediction.",
 )
 console = Console()
@@ -56,13 +59,73 @@ def _named(source):
         raise TrackdynInputError(f"{where}: {exc}") from None
 
 
+# Unit suffixes of table columns (longest first, so ``_kN_per_mm`` wins over ``_mm``).
+UNITS = {
+    "_kN_per_mm": "kN/mm",
+    "_m_per_s2": "m/s²",
+    "_m_per_s": "m/s",
+    "_kmh": "km/h",
+    "_kN": "kN",
+    "_mm": "mm",
+    "_Hz": "Hz",
+}
+# Short names of known quantities (column name without its unit suffix).
+SHORT_NAMES = {
+    "dyn_load_max": "ΔP max",
+    "dyn_load_min": "ΔP min",
+    "dyn_load_sd": "ΔP SD",
+    "dominant_frequency": "f dom.",
+    "secondary_max": "sec. max",
+    "body_bounce_acc_rms": "bounce RMS",
+    "k2_mean": "k2 mean",
+    "k2_min": "k2 min",
+    "k2_max": "k2 max",
+    "ys_mean": "ys mean",
+    "d1_sd_max": "D1 SD max",
+    "d2_sd_max": "D2 SD max",
+}
+# Notes printed under a table whose headers use the symbol.
+NOTES = {"ΔP": "ΔP: dynamic wheel load (wheel load - static wheel load)"}
+
+
+def header(column: str) -> str:
+    """Short table header of a column: its quantity, then its unit in brackets.
+
+    Parameters
+    ----------
+    column : str
+        Column name with an optional unit suffix (``dyn_load_max_kN``).
+
+    Returns
+    -------
+    str
+        ``"ΔP max\\n[kN]"`` for a known quantity and unit; the column as it is if its
+        suffix is not a known unit.
+    """
+    for suffix, unit in UNITS.items():
+        if column.endswith(suffix):
+            stem = column.removesuffix(suffix)
+            return f"{SHORT_NAMES.get(stem, stem)}\n[{unit}]"
+    return column
+
+
 def _show(table, title: str) -> None:
-    """Print a DataFrame as a rich table, numbers to 3 significant digits."""
-    show = Table(title=title)
-    for col in table.columns:
-        show.add_column(str(col))
-    for row in table.itertuples(index=False):
-        show.add_row(*(v if isinstance(v, str) else f"{v:.3g}" for v in row))
+    """Print a DataFrame as a rich table, short headers with units, 3 significant digits.
+
+    No column is narrower than its widest value or header word: at a narrow terminal the
+    headers wrap between words instead of being cut.
+    """
+    headers = [header(str(col)) for col in table.columns]
+    notes = [note for symbol, note in NOTES.items() if any(symbol in h for h in headers)]
+    show = Table(title=title, caption="\n".join(notes) or None, box=box.SIMPLE_HEAD)
+    rows = [
+        [v if isinstance(v, str) else f"{v:.3g}" for v in row]
+        for row in table.itertuples(index=False)
+    ]
+    for j, h in enumerate(headers):
+        show.add_column(Text(h), min_width=max(len(w) for w in [*h.split(), *(r[j] for r in rows)]))
+    for row in rows:
+        show.add_row(*map(Text, row))
     console.print(show)
 
 
@@ -235,7 +298,7 @@ def deteriorate(
     show = Table(title=f"Deterioration, {spec.run.model}: {len(datasets)} section(s)")
     for col in ("section", "MGT", "steps", "settlement min/mean/max [mm]", "D1 SD max [mm]",
                 "trigger [MGT]"):  # fmt: skip
-        show.add_column(col)
+        show.add_column(Text(col))
     for r in table.itertuples(index=False):
         show.add_row(
             r.section,

@@ -7,8 +7,19 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.colors import to_rgb  # noqa: E402
 
 RAIL_COLOURS = {"left": "tab:blue", "right": "tab:red"}
+# Line style, width and darkening of the contacts on one rail, front to back: where two
+# contacts see the same track, the wide light line of the first shows around the darker
+# dashes of the next.
+CONTACT_STYLES = (("-", 2.4, 0.0), ("--", 1.4, 0.45), (":", 1.6, 0.7), ("-.", 0.8, 0.85))
+ZOOM_M = (50.0, 100.0)  # window of the zoomed wheel-load panels [m]
+
+
+def run_title(ds) -> str:
+    """Model, vehicle and speed of a run (`trackdyn.simulation.simulate` result)."""
+    return f"{ds.attrs['model']}, {ds.attrs['vehicle']}, {ds.attrs['speed_m_per_s'] * 3.6:.0f} km/h"
 
 
 def save(fig, path) -> None:
@@ -39,15 +50,16 @@ def track_overview(ds, path) -> None:
         )
         axes[2].plot(ds.sleeper_distance, ds.k2.sel(rail=rail) / 1e6, color=c, lw=0.7, label=rail)
     sd = ds.sd_unloaded.sel(band="D1")
-    width = float(sd.segment_end[0] - sd.segment_start[0])
-    for j, rail in enumerate(sd.rail.values):
-        axes[3].bar(
-            sd.segment_start + width * (0.25 + 0.5 * j),
+    for rail in sd.rail.values:
+        axes[3].hlines(
             sd.sel(rail=rail),
-            width=width * 0.45,
+            sd.segment_start,
+            sd.segment_end,
             color=RAIL_COLOURS[str(rail)],
+            lw=3,
             label=str(rail),
         )
+    axes[3].set_ylim(bottom=0)
     for ax in axes[:2]:
         ax.invert_yaxis()
     labels = [
@@ -56,10 +68,11 @@ def track_overview(ds, path) -> None:
         "k2 [kN/mm]",
         "D1 SD per segment [mm]",
     ]
-    for ax, label in zip(axes, labels, strict=True):
+    legend_at = ("upper right", "upper right", "upper right", "lower right")  # D1: over 0
+    for ax, label, loc in zip(axes, labels, legend_at, strict=True):
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
-        ax.legend(loc="upper right", fontsize=8)
+        ax.legend(loc=loc, fontsize=8)
     axes[-1].set_xlabel("distance [m]")
     fig.suptitle(f"Track input, static wheel load {ds.attrs['static_wheel_load_N'] / 1e3:.1f} kN")
     save(fig, path)
@@ -69,15 +82,22 @@ def load_deflection(lin, path, n: int = 4) -> None:
     """Measured curves of a few sleepers with their linearisation (as the seed's Fig. 5.3)."""
     ps, dp = lin.static_load, lin.delta * lin.static_load
     k2 = lin.k2
-    picks = {
-        "softest": np.unravel_index(np.argmin(k2), k2.shape),
-        "stiffest": np.unravel_index(np.argmax(k2), k2.shape),
-        "largest ys": np.unravel_index(np.argmax(lin.ys), k2.shape),
-        "median": np.unravel_index(np.argsort(k2, axis=None)[k2.size // 2], k2.shape),
+    criteria = {
+        "softest": np.argmin(k2),
+        "stiffest": np.argmax(k2),
+        "largest ys": np.argmax(lin.ys),
+        "median": np.argsort(k2, axis=None)[k2.size // 2],
     }
+    picks: dict[int, list[str]] = {}  # one curve per sleeper, naming every criterion it meets
+    for label, flat in list(criteria.items())[:n]:
+        picks.setdefault(int(flat), []).append(label)
     fig, ax = plt.subplots(figsize=(8, 6))
     supports = lin.track.supports
-    for (label, (r, i)), colour in zip(list(picks.items())[:n], plt.cm.tab10.colors, strict=False):
+    for j, ((flat, labels), colour) in enumerate(
+        zip(picks.items(), plt.cm.tab10.colors, strict=False)
+    ):
+        label = " and ".join(labels)
+        r, i = np.unravel_index(flat, k2.shape)
         rail = ("left", "right")[r]
         curve = getattr(supports, rail)[i]
         loads = np.linspace(curve.load[0], curve.load[-1], 200)
@@ -90,12 +110,22 @@ def load_deflection(lin, path, n: int = 4) -> None:
             f"k2 = {k2[r, i] / 1e6:.0f} kN/mm",
         )
         p = np.array([ps - 1.6 * dp, ps + 1.6 * dp])
-        ax.plot((lin.ys[r, i] + (p - ps) / k2[r, i]) * 1e3, p / 1e3, "--", color=colour, lw=1)
+        ax.plot(
+            (lin.ys[r, i] + (p - ps) / k2[r, i]) * 1e3,
+            p / 1e3,
+            "--",
+            color="k",
+            lw=1.2,
+            zorder=3,
+            label="linearised: slope k2 through (ys, Ps)" if j == 0 else None,
+        )
     for level in (ps - dp, ps, ps + dp):
         ax.axhline(level / 1e3, color="grey", lw=0.6, ls=":")
     ax.set_xlabel("deflection [mm]")
     ax.set_ylabel("wheel load [kN]")
-    ax.set_title("Load-deflection curves (markers: measured; dashed: linearised over Ps ± ΔP)")
+    ax.set_title(
+        "Load-deflection curves (markers: measured; black dashed: linearised over Ps ± ΔP)"
+    )
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
     save(fig, path)
@@ -118,30 +148,75 @@ def deflection_basin(rail, x0, with_gap, without_gap, load, path) -> None:
     save(fig, path)
 
 
+def _contact_style(ds, contacts, c) -> dict:
+    """Colour of the contact's rail; line style by its order among ``contacts`` on that rail."""
+    rail = str(ds.contact_rail.sel(contact=c).values)
+    same_rail = [k for k in contacts if str(ds.contact_rail.sel(contact=k).values) == rail]
+    ls, lw, dark = CONTACT_STYLES[same_rail.index(c) % len(CONTACT_STYLES)]
+    colour = np.array(to_rgb(RAIL_COLOURS.get(rail, "k"))) * (1 - dark)
+    return {"color": colour, "ls": ls, "lw": lw, "label": str(c)}
+
+
+def _full_and_zoom(axes, x, y, **style) -> None:
+    """Plot ``y`` against ``x`` on the full-length axes and, within `ZOOM_M`, the zoomed ones."""
+    axes[0].plot(x, y, **{**style, "lw": style["lw"] * 0.4})
+    inside = (x >= ZOOM_M[0] - 1) & (x <= ZOOM_M[1] + 1)
+    axes[1].plot(x[inside], y[inside], **style)
+
+
 def wheel_loads(ds, path) -> None:
-    """Wheel load of each contact along the track, with the track input beneath."""
+    """Wheel loads of the front and back contacts, track input and stiffness under them.
+
+    Left column: the whole track; right column: the window `ZOOM_M`. Colour: rail; line
+    style: order of the contact on its rail. Contacts on one rail run over the same input
+    and stiffness, so their lines there coincide, shifted at the ends by their offsets.
+    """
+    contacts = list(ds.contact.values)
+    front = ds.contact_offset.values >= 0
+    groups = {"front": np.array(contacts)[front], "back": np.array(contacts)[~front]}
+    groups = {name: list(g) for name, g in groups.items() if g.size}
+    rows = [*groups, "input", "stiffness"]
     fig, axes = plt.subplots(
-        3, 1, figsize=(11, 9), sharex=True, gridspec_kw={"height_ratios": [2, 1, 1]}
+        len(rows),
+        2,
+        figsize=(14, 2.6 * len(rows) + 1),
+        sharex="col",
+        gridspec_kw={"width_ratios": [2.4, 1]},
+        squeeze=False,
     )
-    for c in ds.contact.values:
-        x = ds.distance + ds.contact_offset.sel(contact=c)
-        axes[0].plot(x, ds.wheel_load.sel(contact=c) / 1e3, lw=0.7, label=str(c))
-        axes[1].plot(x, ds.wheel_input.sel(contact=c) * 1e3, lw=0.7, label=str(c))
-        axes[2].plot(x, ds.track_stiffness.sel(contact=c) / 1e6, lw=0.7, label=str(c))
-    axes[0].axhline(ds.attrs["static_wheel_load_N"] / 1e3, color="k", lw=0.6, ls=":")
-    axes[1].invert_yaxis()
-    for ax, label in zip(
-        axes,
-        ("wheel load [kN]", "track input [mm]\n(down +)", "track stiffness [kN/mm]"),
-        strict=True,
+    x_of = {c: (ds.distance + ds.contact_offset.sel(contact=c)).values for c in contacts}
+    for row, (name, members) in zip(axes, groups.items(), strict=False):
+        for c in members:
+            style = _contact_style(ds, members, c)
+            _full_and_zoom(row, x_of[c], ds.wheel_load.sel(contact=c).values / 1e3, **style)
+        for ax in row:
+            ax.axhline(ds.attrs["static_wheel_load_N"] / 1e3, color="k", lw=0.6, ls=":")
+        where = f"{name} contacts" if len(groups) > 1 else "contacts"
+        row[0].set_ylabel(f"wheel load [kN]\n{where}")
+    for row, (var, scale) in zip(
+        axes[len(groups) :], (("wheel_input", 1e3), ("track_stiffness", 1e-6)), strict=True
     ):
-        ax.set_ylabel(label)
+        for c in contacts:
+            style = _contact_style(ds, contacts, c)
+            _full_and_zoom(row, x_of[c], ds[var].sel(contact=c).values * scale, **style)
+    axes[-2, 0].set_ylabel("track input [mm]\n(down +)")
+    if len(contacts) > len(set(ds.contact_rail.values)):
+        axes[-2, 0].set_title(
+            "contacts on one rail run over the same input and stiffness: their lines coincide",
+            fontsize=9,
+            loc="left",
+        )
+    axes[-1, 0].set_ylabel("track stiffness [kN/mm]")
+    for ax in axes[-2]:
+        ax.invert_yaxis()
+    for ax in axes.flat:
         ax.grid(alpha=0.3)
-        ax.legend(loc="upper right", fontsize=8, ncol=4)
-    axes[-1].set_xlabel("position of the contact along the track [m]")
-    fig.suptitle(
-        f"{ds.attrs['model']}, {ds.attrs['vehicle']}, {ds.attrs['speed_m_per_s'] * 3.6:.0f} km/h"
-    )
+    for ax in axes[:, 1]:
+        ax.set_xlim(*ZOOM_M)
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1), fontsize=8, handlelength=3)
+    axes[-1, 0].set_xlabel("position of the contact along the track [m]")
+    axes[-1, 1].set_xlabel(f"zoom {ZOOM_M[0]:g}-{ZOOM_M[1]:g} m [m]")
+    fig.suptitle(f"Wheel loads: {run_title(ds)}")
     save(fig, path)
 
 
@@ -154,6 +229,7 @@ def secondary(ds, path) -> None:
         )
     ax.set_xlabel("vehicle centre position [m]")
     ax.set_ylabel("secondary displacement [mm]\n(compression +)")
+    ax.set_title(f"Secondary suspension displacement\n{run_title(ds)}")
     ax.grid(alpha=0.3)
     if ds.suspension.size:
         ax.legend(fontsize=8, ncol=4)
@@ -174,7 +250,10 @@ def wedge_friction(ds, path) -> None:
         )
     ax.set_xlabel("relative velocity [mm/s] (compression +)")
     ax.set_ylabel("wedge friction force [kN]")
-    ax.set_title("Friction wedges: stick (sloped band) and slip (flat limits)")
+    ax.set_title(
+        "Friction wedges: stick (steep band through zero) and slip\n"
+        "(limit μ × normal force, which varies with the spring load)"
+    )
     ax.grid(alpha=0.3)
     if ds.wedge.size:
         ax.legend(markerscale=8, fontsize=8)
@@ -200,7 +279,7 @@ def study_matrix(table, path) -> None:
         ax.set_xlabel("excitation case")
         ax.set_ylabel(label)
         ax.grid(alpha=0.3, axis="y")
-    axes[0].legend(fontsize=8)
+    axes[1].legend(loc="upper left", bbox_to_anchor=(1.01, 1), fontsize=8)
     fig.suptitle(
         "(i) geometry, rigid track  (ii) geometry, constant stiffness  "
         "(iii) stiffness, level track  (iv) both",
@@ -241,23 +320,50 @@ def tornado(table, path, column: str = "dyn_load_sd_kN") -> None:
 
 
 def spectra(table, ds, path) -> None:
-    """Wheel-load spectrum of each variant."""
-    fig, ax = plt.subplots(figsize=(9, 5))
+    """Wheel-load spectrum of each run, one panel per value of the first varying label.
+
+    With two or more varying labels (vehicle, parameter, ...) the runs are split into
+    panels by the first one and told apart by the others; a ``baseline`` run is drawn in
+    black in every panel.
+    """
     label_cols = [
         c
         for c in table.columns
-        if c in ("parameter", "factor", "vehicle", "damping", "case", "speed_kmh")
+        if (c in ("parameter", "factor", "vehicle", "damping", "case", "speed_kmh"))
         or c.startswith("factor_")
     ]
-    for run in range(ds.sizes["run"]):
-        if table["error"].iloc[run]:
-            continue
-        label = ", ".join(f"{table[c].iloc[run]}" for c in label_cols)
-        ax.semilogy(ds.frequency, ds.wheel_load_psd.isel(run=run), lw=0.8, label=label)
-    ax.set_xlabel("frequency [Hz]")
-    ax.set_ylabel("PSD of the dynamic wheel load [kN²/Hz]")
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=6, ncol=3)
+    ok = table[table["error"] == ""]
+    label_cols = [c for c in label_cols if ok[c].astype(str).nunique() > 1] or label_cols
+    split, rest = (label_cols[0], label_cols[1:]) if len(label_cols) > 1 else (None, label_cols)
+    baseline = ok["parameter"] == "baseline" if "parameter" in ok else np.zeros(len(ok), bool)
+    panels = [None] if split is None else list(dict.fromkeys(ok.loc[~baseline, split]))
+    fig, axes = plt.subplots(
+        len(panels), 1, figsize=(11, 1.5 + 2.6 * len(panels)), sharex=True, squeeze=False
+    )
+    for ax, panel in zip(axes[:, 0], panels, strict=True):
+        runs = ok[~baseline] if split is None else ok[~baseline & (ok[split] == panel)]
+        colours = (
+            plt.cm.tab10.colors
+            if len(runs) <= 10
+            else plt.cm.viridis(np.linspace(0, 0.9, len(runs)))
+        )
+        for (run, row), colour in zip(runs.iterrows(), colours, strict=False):
+            label = ", ".join(f"{c} {row[c]}" for c in rest)
+            ax.semilogy(
+                ds.frequency, ds.wheel_load_psd.isel(run=run), lw=0.9, color=colour, label=label
+            )
+        for run in ok.index[baseline]:
+            ax.semilogy(
+                ds.frequency, ds.wheel_load_psd.isel(run=run), lw=1.2, color="k", label="baseline"
+            )
+        ax.set_ylabel("PSD [kN²/Hz]")
+        if split is not None:
+            ax.set_title(f"{split} {panel}", fontsize=10, loc="left")
+        ax.grid(alpha=0.3, which="both")
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1), fontsize=8)
+    axes[-1, 0].set_xlabel("frequency [Hz]")
+    fig.suptitle(f"Dynamic wheel load spectra: {ds.attrs['kind']} study, {ds.attrs['model']}")
     save(fig, path)
 
 
