@@ -9,6 +9,7 @@ sized to the machine; with ``workers=1`` they run one after another in this proc
 
 from __future__ import annotations
 
+import functools
 import os
 
 from trackdyn.errors import TrackdynInputError
@@ -37,12 +38,9 @@ def _client(workers: int | None, scheduler: str | None):
     # Two Dask defaults made a run (1 km, 11-DOF) take 0.56-0.78 s in a worker instead of
     # 0.38 s: MALLOC_TRIM_THRESHOLD_ turns off glibc's adaptive mmap threshold, so every
     # large array is mmapped and page-faulted afresh; and the statistical profiler takes
-    # the GIL every 10 ms. Local workers run with neither. Each worker process is one
-    # core's worth of work: numba's parallel batch loop runs on one thread there, as
-    # Dask already sets for the BLAS libraries.
+    # the GIL every 10 ms. Local workers run with neither.
     settings = {
         "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
-        "distributed.nanny.pre-spawn-environ.NUMBA_NUM_THREADS": 1,
         "distributed.worker.profile.enabled": False,
     }
     with dask.config.set(settings):
@@ -55,6 +53,19 @@ def _client(workers: int | None, scheduler: str | None):
             dashboard_address=":0",
         )
     return Client(cluster), cluster
+
+
+def _on_one_core(func, task):
+    """``func(task)`` in a Dask worker, numba's parallel loops on one thread.
+
+    A worker process is one core's worth of work (Dask sets the same for the BLAS
+    libraries); numba's thread count is per calling thread, so it is set here, in the
+    thread that runs the task.
+    """
+    import numba
+
+    numba.set_num_threads(1)
+    return func(task)
 
 
 def run_tasks(
@@ -98,7 +109,7 @@ def run_tasks(
 
         client, cluster = _client(workers, scheduler)
         try:
-            futures = client.map(func, tasks, pure=False)
+            futures = client.map(functools.partial(_on_one_core, func), tasks, pure=False)
             for _ in as_completed(futures):
                 bar.advance()
             return client.gather(futures)
