@@ -33,7 +33,9 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
             f"{float(centre[np.argmax(bad)]):.2f} m): check the time step and the input ranges"
         )
     n_axles = np.array([len(a) for a in model.contact_axles], dtype=float)
-    damping_force = (out["v"] @ model.Dc.T) * model.contact_damping
+    # einsum, not BLAS: once numba's parallel runtime has started its threads, BLAS's own
+    # threads make a (steps x dofs) @ (dofs x contacts) product 15 times slower here
+    damping_force = _rows_times(out["v"], model.Dc) * model.contact_damping
     wheel_load = model.static_wheel_load + (out["fc"] + damping_force) / n_axles
     dofs = list(model.dof_names)
     wedge = ("time", "wedge")
@@ -67,7 +69,7 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
             ),
             "secondary_displacement": (
                 ("time", "suspension"),
-                out["q"] @ model.Ds.T,
+                _rows_times(out["q"], model.Ds),
                 {
                     "units": "m",
                     "long_name": "displacement across "
@@ -135,6 +137,11 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
                 units=units
             )
     return ds
+
+
+def _rows_times(x: np.ndarray, D: np.ndarray) -> np.ndarray:
+    """``x @ D.T`` for a long ``x`` and a small ``D``, without BLAS."""
+    return np.einsum("tj,cj->tc", x, D)
 
 
 def dominant_frequency(signal: np.ndarray, dt: float) -> float:
