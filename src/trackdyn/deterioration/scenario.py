@@ -18,10 +18,11 @@ speed_kmh = 60
 passages_per_mgt = 8065
 
 [settlement]
-law = "power"                   # power, shenton or sato
+law = "power"                   # power, shenton, sato or varandas
 # file = "settlement.toml"      # default: the shipped illustrative, uncalibrated values
 overrides = {}                  # law parameters, SI units
-scatter_cov = 0.0               # lognormal scatter of each sleeper's settlement
+rate_cov = 0.3                  # lognormal settlement-rate factor per sleeper (illustrative)
+rate_correlation_length_m = 3   # its correlation length along the track (illustrative)
 seed = 0
 
 [loop]
@@ -84,13 +85,15 @@ DEFAULT_TRAFFIC = [
 
 
 class SettlementSpec(Strict):
-    """``[settlement]``: ``law`` name, parameter ``file``, ``overrides`` [SI], lognormal
-    ``scatter_cov`` [-] of each sleeper's settlement and its ``seed``."""
+    """``[settlement]``: ``law`` name, parameter ``file``, ``overrides`` [SI], the lognormal
+    settlement-rate field's ``rate_cov`` [-], ``rate_correlation_length_m`` [m] and
+    ``seed``."""
 
     law: str = "power"
     file: Path | None = None
     overrides: dict[str, float] = Field(default_factory=dict)
-    scatter_cov: NonNegativeFloat = 0.0
+    rate_cov: NonNegativeFloat = 0.3
+    rate_correlation_length_m: PositiveFloat = 3.0
     seed: int = Field(0, ge=0)
 
     @field_validator("law")
@@ -191,7 +194,8 @@ def loop_options(spec: DeteriorationScenario, seed):
         threshold_sd_mm=lp.threshold_sd_mm,
         segment_length=lp.segment_length_m,
         max_steps=lp.max_steps,
-        scatter_cov=spec.settlement.scatter_cov,
+        rate_cov=spec.settlement.rate_cov,
+        rate_correlation_length=spec.settlement.rate_correlation_length_m,
         seed=seed,
         run=spec.run,
         rail=spec.track.rail,
