@@ -7,6 +7,7 @@ import pytest
 
 from trackdyn.deterioration.loop import step_size
 from trackdyn.deterioration.settlement import (
+    time_hardening_increment,
     LAWS,
     PowerLaw,
     SatoLaw,
@@ -70,9 +71,13 @@ def test_step_size_meets_the_limit_exactly():
     n = 64520.0  # cycles per MGT: 8 wheels x 8065 passages
     limit = 0.5e-3
     expected = (((limit / (factor.max() * law.K_s) + N[0, 1] ** 0.2) ** 5) - N[0, 1]) / n
-    dm = step_size(law, factor, N, n, cap=100.0, limit=limit)
-    assert dm == pytest.approx(expected, rel=1e-9)
-    assert step_size(law, factor, N, n, cap=0.1 * expected, limit=limit) == 0.1 * expected
+
+    def increment(dm):
+        return time_hardening_increment(law, factor, N, n * dm)
+
+    dm = step_size(increment, cap=100.0, limit=limit)
+    assert dm == pytest.approx(expected, rel=1e-8)
+    assert step_size(increment, cap=0.1 * expected, limit=limit) == 0.1 * expected
 
 
 def test_shipped_file_gives_value_unit_source_and_is_labelled_illustrative():

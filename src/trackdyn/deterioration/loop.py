@@ -142,7 +142,7 @@ def step_size(increment, cap: float, limit: float) -> float:
 
     if excess(cap) <= 0:
         return cap
-    return brentq(excess, 0.0, cap, xtol=1e-9 * cap, rtol=1e-9)
+    return brentq(excess, 0.0, cap, xtol=1e-12 * cap, rtol=1e-10)
 
 
 def predict(track: Track, traffic, law, options=None, *, progress=False):
@@ -224,7 +224,7 @@ def predict(track: Track, traffic, law, options=None, *, progress=False):
             for key, value in (("mgt", mgt), ("settlement", level), ("geometry", geometry),
                                ("hanging_gap", state.hanging_gap)):  # fmt: skip
                 history[key].append(value)
-            bar(mgt)
+            bar.update(mgt)
     timing["total"] = time.perf_counter() - t0
     return make_dataset(track, history, steps, snap_at, acc.N, rate, timing, traffic, law, o)
 
