@@ -9,9 +9,7 @@ from trackdyn.options import RunOptions
 from trackdyn.track.synthetic import SoftSpot, synthetic_track
 from trackdyn.vehicle.parameters import load_vehicle
 
-EI_60E1 = 210e9 * 3038e-8  # E = 210 GPa, I = 3038 cm^4 (data.md, 60E1) [N m^2]
 PASSAGES = 8065.0  # 1e6 t / (104 t + 20 t), the issue's coal traffic [per MGT]
-WHEELS_PER_RAIL = 4  # two bogies of two axles
 LAW = load_law("power")  # the shipped illustrative parameters
 LOADED = Traffic(load_vehicle("loaded"), 60 / 3.6, PASSAGES, "loaded")
 EMPTY = Traffic(load_vehicle("empty"), 60 / 3.6, PASSAGES, "empty")
@@ -20,6 +18,7 @@ EMPTY = Traffic(load_vehicle("empty"), 60 / 3.6, PASSAGES, "empty")
 def options(**kw):
     base = {
         "run": RunOptions(model="7dof"),
+        "rate_cov": 0.0,  # uniform ballast unless a test asks for the rate field
         "total_mgt": 5.0,
         "snapshot_every_mgt": 2.5,
         "segment_length": 60.0,
@@ -41,34 +40,19 @@ def test_no_traffic_no_settlement(uniform):
         assert list(ds.mgt.values) == [0.0, 2.5, 5.0]  # one step per snapshot interval
 
 
-def winkler_rail_seat_load(P, k):
-    """P s / (2 L_c) with u from eq 5.7 and L_c from eq 5.6 (corrected), by hand."""
-    u = k ** (4 / 3) / (64 * EI_60E1) ** (1 / 3)
-    lc = (4 * EI_60E1 / u) ** 0.25
-    return P * 0.6 / (2 * lc)  # sleeper spacing 0.6 m (synthetic_track default)
-
-
 @pytest.mark.parametrize("traffic", [[LOADED], [LOADED, EMPTY]], ids=["loaded", "mixed"])
-def test_uniform_level_track_settles_uniformly_by_the_closed_form(uniform, traffic):
-    """On level track with uniform support the wheel loads stay static, so every sleeper
-    follows e = K_s (Q/Q_ref)^α (k2/k_ref)^γ N^β; mixed traffic takes the cycle-weighted
-    mean load factor and the summed cycles (the documented rule)."""
+def test_uniform_level_track_stays_level(uniform, traffic):
+    """Level track on uniform supports and uniform ballast: every sleeper away from the
+    section ends carries the same loads, so the ballast settles evenly and the rail stays
+    level. Within 6 m of the ends the bogie's other axle is off the section (the run does
+    not reach there), which changes the loads by up to 0.5 % (measured)."""
     ds = predict(uniform, traffic, LAW, options())
-    e = ds.settlement.isel(mgt=-1).values
-    # Round-off of the time integration only (measured ~5e-13 relative); any dynamic load
-    # (a real non-uniformity) of 1e-6 of the static load would already show.
-    assert (e.max() - e.min()) / e.mean() < 1e-9
-    assert float(ds.d1_sd.max()) < 1e-9  # shape kept: level stays level [mm]
-    factors = []
-    for t in traffic:
-        P = t.vehicle.static_wheel_load
-        k = float(uniform.linearise(P).k2[0, 0])
-        Q = winkler_rail_seat_load(P, k)
-        factors.append((Q / LAW.Q_ref) ** 2 * (k / LAW.k_ref) ** -1)  # α = 2, γ = -1
-    N = WHEELS_PER_RAIL * PASSAGES * len(traffic) * 5.0  # cycles after 5 MGT
-    expected = np.mean(factors) * LAW.K_s * N**0.2  # equal passages: plain mean; β = 0.2
-    np.testing.assert_allclose(e, expected, rtol=1e-9)
-    assert ds.load_cycles.values == pytest.approx(N)
+    e = ds.settlement.isel(mgt=-1)
+    x = ds.sleeper_distance
+    inner = e.where((x > 6.0) & (x < 114.0), drop=True).values
+    assert (inner.max() - inner.min()) / inner.mean() < 1e-3
+    assert float(ds.d1_sd.max()) < 0.01  # mm, the issue's criterion
+    assert int(ds.hanging_sleepers.max()) == 0
 
 
 def test_soft_spot_settles_more_and_its_segment_deteriorates():
@@ -102,13 +86,17 @@ def test_halving_the_step_limit_changes_50_mgt_settlement_by_less_than_2_percent
     assert runs[0].step_max_settlement.max() <= 0.5e-3 * (1 + 1e-9)
 
 
-def test_scatter_is_seeded_lognormal(uniform):
-    runs = [predict(uniform, [LOADED], LAW, options(scatter_cov=0.2, seed=s)) for s in (1, 1, 2)]
+def test_rate_field_is_seeded_lognormal(uniform):
+    runs = [predict(uniform, [LOADED], LAW, options(rate_cov=0.3, seed=s)) for s in (1, 1, 2)]
+    np.testing.assert_array_equal(runs[0].rate_factor, runs[1].rate_factor)
+    assert not np.allclose(runs[0].rate_factor, runs[2].rate_factor)
+    f = runs[0].rate_factor.values
+    # lognormal with mean 1: every factor positive; 400 correlated samples (3 m correlation,
+    # about 40 independent ones per rail): the sample mean within 0.3 / sqrt(40) * 3
+    assert f.min() > 0 and abs(f.mean() - 1.0) < 0.15
     e = [r.settlement.isel(mgt=-1).values for r in runs]
     np.testing.assert_array_equal(e[0], e[1])
     assert not np.allclose(e[0], e[2])
-    # 400 samples of a CoV of 0.2: standard error of the estimate about 0.2 / sqrt(800)
-    assert np.std(e[0]) / np.mean(e[0]) == pytest.approx(0.2, abs=0.03)
 
 
 def test_bad_options(uniform):

@@ -142,7 +142,7 @@ def step_size(increment, cap: float, limit: float) -> float:
 
     if excess(cap) <= 0:
         return cap
-    return brentq(excess, 0.0, cap, xtol=1e-12 * cap, rtol=1e-10)
+    return brentq(excess, 0.0, cap, xtol=1e-14 * cap, rtol=1e-12)
 
 
 def predict(track: Track, traffic, law, options=None, *, progress=False):
@@ -177,7 +177,11 @@ def predict(track: Track, traffic, law, options=None, *, progress=False):
     rate = rate_field(pos.size, float(np.median(np.diff(pos))), o.rate_cov,
                       o.rate_correlation_length, o.seed)  # fmt: skip
     runs, lins = _runs(track, traffic, o)
-    base = lins[max(lins)] if lins else track.linearise(NO_TRAFFIC_LOAD, o.run.delta, extrapolate=o.run.extrapolate)
+    base = (
+        lins[max(lins)]
+        if lins
+        else track.linearise(NO_TRAFFIC_LOAD, o.run.delta, extrapolate=o.run.extrapolate)
+    )
     timing = {"vehicle": 0.0, "beam": 0.0}
     clock = time.perf_counter()
     ballast = Ballast(base, rail_section(o.rail), o.sleeper_mass)

@@ -28,7 +28,6 @@ MAX_SWEEPS = 60
 """Active-set iterations allowed per batch of wheel positions."""
 
 
-
 @dataclass(frozen=True)
 class RailBeam:
     """One rail on its sleepers: what does not change with settlement.
