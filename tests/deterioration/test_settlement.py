@@ -7,7 +7,6 @@ import pytest
 
 from trackdyn.deterioration.loop import step_size
 from trackdyn.deterioration.settlement import (
-    time_hardening_increment,
     LAWS,
     PowerLaw,
     SatoLaw,

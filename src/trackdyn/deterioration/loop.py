@@ -212,7 +212,7 @@ def predict(track: Track, traffic, law, options=None, *, progress=False):
                     peak[r] = np.maximum(peak[r], q)
             increment = acc.prepare(cycles)
             target = snap_at[np.searchsorted(snap_at, mgt, side="right")]
-            dm = step_size(lambda d: rate * increment(d), target - mgt, limit)
+            dm = step_size(lambda d, inc=increment: rate * inc(d), target - mgt, limit)
             de = rate * increment(dm)
             acc.advance(dm)
             level = level + de
