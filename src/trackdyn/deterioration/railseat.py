@@ -78,7 +78,7 @@ def dead_state(beam: RailBeam, gap):
     """
     base = float(np.min(gap))  # the whole rail first drops onto the highest ballast
     supports = linear_supports(beam.position, beam.stiffness, np.asarray(gap) - base)
-    sol = solve_beam(supports, beam.EI, beam.position, beam.weight, max_element=1e3)
+    sol = solve_beam(supports, beam.EI, beam.position, beam.weight, max_element=1e3, max_iter=400)
     return sol.support_deflection + base, sol.support_force
 
 
