@@ -32,7 +32,7 @@ import dataclasses
 import numpy as np
 from scipy.ndimage import median_filter
 
-from trackdyn.deterioration.railseat import RailBeam, Windows, dead_state
+from trackdyn.deterioration.railseat import RailBeam, RailRest, Windows, rest_state
 from trackdyn.errors import TrackdynInputError
 from trackdyn.track.synthetic import correlated_field
 from trackdyn.track.track import RAILS, Geometry, LinearisedTrack
@@ -83,21 +83,33 @@ def excess_gap(seating_gap: np.ndarray) -> np.ndarray:
 
 @dataclasses.dataclass(frozen=True)
 class BallastState:
-    """The rails' dead state for one set of ballast levels.
+    """Both rails at rest on one set of ballast levels.
 
     Parameters
     ----------
-    gap : ndarray
-        Gap between sleeper and ballast at zero rail deflection, (2, n) [m].
-    deflection : ndarray
-        Rail deflection under self-weight, (2, n) [m].
-    force : ndarray
-        Support forces under self-weight, (2, n) [N].
+    rails : tuple of RailRest
+        Each rail's rest state (gap, deflection, support force, bearing sleepers).
     """
 
-    gap: np.ndarray
-    deflection: np.ndarray
-    force: np.ndarray
+    rails: tuple[RailRest, ...]
+
+    def _stack(self, name):
+        return np.array([getattr(r, name) for r in self.rails])
+
+    @property
+    def gap(self) -> np.ndarray:
+        """Gap between sleeper and ballast at zero rail deflection, (2, n) [m]."""
+        return self._stack("gap")
+
+    @property
+    def deflection(self) -> np.ndarray:
+        """Rail deflection under self-weight, (2, n) [m]."""
+        return self._stack("deflection")
+
+    @property
+    def force(self) -> np.ndarray:
+        """Support forces under self-weight, (2, n) [N]."""
+        return self._stack("force")
 
     @property
     def hanging_gap(self) -> np.ndarray:
@@ -135,11 +147,20 @@ class Ballast:
         self.initial = self.state(np.zeros_like(self.void))
         self._secant0 = {}
 
-    def state(self, level) -> BallastState:
-        """Dead state of both rails with ballast settlement ``level`` (2, n) [m]."""
+    def state(self, level, previous: BallastState | None = None) -> BallastState:
+        """Both rails at rest with ballast settlement ``level`` (2, n) [m].
+
+        Parameters
+        ----------
+        level : ndarray
+            Settlement of the ballast under each rail seat, (2, n) [m].
+        previous : BallastState, optional
+            A state near this one (the previous step's), to start the solve from.
+        """
         gap = self.void + level
-        dead = [dead_state(b, g) for b, g in zip(self.beams, gap, strict=True)]
-        return BallastState(gap, np.array([d[0] for d in dead]), np.array([d[1] for d in dead]))
+        start = [None] * len(self.beams) if previous is None else [r.closed for r in previous.rails]
+        return BallastState(tuple(rest_state(b, g, c)
+                                  for b, g, c in zip(self.beams, gap, start, strict=True)))  # fmt: skip
 
     def geometry(self, measured: Geometry, state: BallastState) -> Geometry:
         """Unloaded space curve: measured plus the change of the rails' rest deflection."""
@@ -149,14 +170,14 @@ class Ballast:
         return Geometry(g.distance, g.left + left, g.right + right, g.where)
 
     def wheel_solve(self, r: int, state: BallastState, centre, position, load):
-        """Rail-seat forces of rail ``r`` with wheel loads on the dead state.
+        """Rail-seat forces of rail ``r`` with wheel loads on the rest state.
 
         Parameters
         ----------
         r : int
             Rail index.
         state : BallastState
-            Current dead state.
+            Current rest state.
         centre : ndarray, shape (B,)
             Sleeper under the wheel of each row.
         position, load : ndarray, shape (B, L)
@@ -169,9 +190,7 @@ class Ballast:
             [N] and rail deflection [m]; see `Windows.solve`.
         """
         w = self.windows[r]
-        f = w.load_vector(centre, position, load)
-        index, force, y = w.solve(centre, f, state.gap[r], state.deflection[r], state.force[r])
-        return index - (self.beams[r].half + 1), force, y
+        return w.solve(state.rails[r], centre, w.load_vector(centre, position, load))
 
     def _secant(self, state: BallastState, static_load: float):
         """Beam secant stiffness [N/m] and mean deflection [m] under ``Ps (1 ± δ)``."""
@@ -181,7 +200,7 @@ class Ballast:
         k, ys = [], []
         for r in range(len(RAILS)):
             _, _, y = self.wheel_solve(r, state, centre, self.position[centre][:, None], load)
-            dy = y[:, self.beams[r].half] - np.tile(state.deflection[r], 2)
+            dy = y[:, self.beams[r].half] - np.tile(state.rails[r].deflection, 2)
             k.append(2 * self.delta * static_load / (dy[n:] - dy[:n]))
             ys.append(0.5 * (dy[n:] + dy[:n]))
         return np.array(k), np.array(ys)
@@ -194,7 +213,7 @@ class Ballast:
         lin0 : LinearisedTrack
             Measured track linearised about one static wheel load.
         state : BallastState
-            Current dead state.
+            Current rest state.
         geometry : Geometry
             Current unloaded space curve.
         """

@@ -6,7 +6,7 @@ contact had at that moment of the run (a bogie contact reports the mean load of 
 leading and trailing wheel, 5.4.3), and the rail-seat forces follow from the rail beam
 on the current ballast (`trackdyn.deterioration.ballast`, quasi-static). A wheel's load
 cycle at a sleeper is the largest force that sleeper carries over all positions of that
-wheel (dead load included), so a hanging sleeper's share shows at its neighbours.
+wheel (self-weight included), so a hanging sleeper's share shows at its neighbours.
 Positions the run did not reach (near the ends of the section) take the loads of the
 nearest point it reached.
 """
@@ -70,7 +70,7 @@ def passage_loads(ds, ballast, state, model) -> np.ndarray:
     ballast : Ballast
         The section's rails and ballast.
     state : BallastState
-        The current dead state.
+        The current rest state.
     model : trackdyn.vehicle.assembly.Model
         The model of the run (its contacts' axles).
 

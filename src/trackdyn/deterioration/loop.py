@@ -217,7 +217,7 @@ def predict(track: Track, traffic, law, options=None, *, progress=False):
             acc.advance(dm)
             level = level + de
             clock = time.perf_counter()
-            state = ballast.state(level)
+            state = ballast.state(level, state)
             geometry = ballast.geometry(track.geometry, state)
             timing["beam"] += time.perf_counter() - clock
             steps["start"].append(mgt)
