@@ -159,8 +159,8 @@ class Ballast:
         """
         gap = self.void + level
         start = [None] * len(self.beams) if previous is None else [r.closed for r in previous.rails]
-        return BallastState(tuple(rest_state(b, g, c)
-                                  for b, g, c in zip(self.beams, gap, start, strict=True)))  # fmt: skip
+        rails = zip(self.beams, gap, start, strict=True)
+        return BallastState(tuple(rest_state(b, g, c) for b, g, c in rails))
 
     def geometry(self, measured: Geometry, state: BallastState) -> Geometry:
         """Unloaded space curve: measured plus the change of the rails' rest deflection."""
