@@ -7,11 +7,11 @@ one linear, tensionless spring per sleeper with the stiffness equivalent to the 
 ``k2`` (eq 5.7 times the spacing, `LinearisedTrack.support_stiffness`) behind a gap. The
 gap at the start is the sleeper's seating gap in excess of the median of its neighbours
 (±`VOID_NEIGHBOURS` sleepers): a void under that sleeper alone; the common part is
-seating of the whole track and stays in the measured linearisation. Settlement ``b``
-[m] adds to it.
+seating of the whole track and stays in the measured linearisation. A freshly tamped
+start (``seated``) closes these voids. Settlement ``b`` [m] adds to the gap.
 
-From the beam, each step re-derives (all changes from the measured state, so that the
-first step runs on the track exactly as measured):
+From the beam, each step re-derives (all changes from the start state, so that the
+first step runs on the track as it starts):
 
 - the unloaded profile: measured profile plus the change of the rail's self-weight
   deflection, interpolated linearly between sleepers;
@@ -131,9 +131,14 @@ class Ballast:
         Sleeper mass per rail seat [kg].
     half : int
         Sleepers each side of a wheel in the beam windows [-].
+    seated : bool
+        Start with every sleeper seated on its ballast (freshly tamped): the initial voids
+        are closed, in the beam and in the linearisation (``ys`` less the void); the
+        support curves keep their stiffness. Otherwise the voids are as measured.
     """
 
-    def __init__(self, lin: LinearisedTrack, rail, sleeper_mass: float, half: int = 10):
+    def __init__(self, lin: LinearisedTrack, rail, sleeper_mass: float, half: int = 10,
+                 seated: bool = False):  # fmt: skip
         pos = lin.track.supports.position
         if pos.size < 2:
             raise TrackdynInputError("the ballast model needs at least two sleepers")
@@ -143,7 +148,9 @@ class Ballast:
         self.position, self.delta = pos, lin.delta
         self.beams = [RailBeam(pos, kd[r], weight, rail.EI, half) for r in range(len(RAILS))]
         self.windows = [Windows(b) for b in self.beams]
-        self.void = excess_gap(lin.seating_gap())
+        void = excess_gap(lin.seating_gap())
+        self.reseat = void if seated else np.zeros_like(void)  # closed by tamping [m]
+        self.void = void - self.reseat
         self.initial = self.state(np.zeros_like(self.void))
         self._secant0 = {}
 
@@ -223,4 +230,5 @@ class Ballast:
         k0, ys0 = self._secant0[key]
         k, ys = self._secant(state, key)
         track = dataclasses.replace(lin0.track, geometry=geometry)
-        return dataclasses.replace(lin0, track=track, k2=lin0.k2 * k / k0, ys=lin0.ys + ys - ys0)
+        ys = lin0.ys - self.reseat + ys - ys0
+        return dataclasses.replace(lin0, track=track, k2=lin0.k2 * k / k0, ys=ys)

@@ -29,7 +29,7 @@ seed = 0
 total_mgt = 50
 max_step_settlement_mm = 0.5
 snapshot_every_mgt = 10
-threshold_sd_mm = 3.0           # D1 SD that triggers maintenance
+threshold_sd_mm = 1.5           # D1 SD that triggers maintenance (illustrative)
 segment_length_m = 200
 max_steps = 1000
 
@@ -38,12 +38,15 @@ geometry = "geometry.csv"
 supports = "supports.csv"
 # sections = "sections.csv"     # or a list of sections: name,geometry,supports
 rail = "60E1"                   # rail section for the load distribution (EI)
+start = "as measured"           # or "tamped"; default: tamped for the built-in example,
+                                # as measured for track files
 ```
 """
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Literal
 
 from pydantic import (
     Field,
@@ -114,19 +117,21 @@ class LoopSpec(Strict):
     total_mgt: PositiveFloat = 50.0
     max_step_settlement_mm: PositiveFloat = 0.5
     snapshot_every_mgt: PositiveFloat = 10.0
-    threshold_sd_mm: PositiveFloat = 3.0
+    threshold_sd_mm: PositiveFloat = 1.5
     segment_length_m: PositiveFloat = 200.0
     max_steps: PositiveInt = 1000
 
 
 class TrackSectionsSpec(Strict):
     """``[track]``: ``geometry`` and ``supports`` CSV files, or a ``sections`` CSV list;
-    ``rail`` section for the bending stiffness EI."""
+    ``rail`` section for the bending stiffness EI; ``start``, ``"tamped"`` or ``"as
+    measured"`` (default: tamped for the built-in example, as measured for files)."""
 
     geometry: Path | None = None
     supports: Path | None = None
     sections: Path | None = None
     rail: str = "60E1"
+    start: Literal["tamped", "as measured"] | None = None
 
     @model_validator(mode="after")
     def _one_source(self):
@@ -174,7 +179,7 @@ def load_deterioration(path=None) -> tuple[DeteriorationScenario, Path]:
     return spec, path.resolve().parent
 
 
-def loop_options(spec: DeteriorationScenario, seed):
+def loop_options(spec: DeteriorationScenario, seed, example: bool = False):
     """`LoopOptions` of a scenario.
 
     Parameters
@@ -182,7 +187,9 @@ def loop_options(spec: DeteriorationScenario, seed):
     spec : DeteriorationScenario
         The scenario.
     seed : int or tuple of int
-        Scatter seed of one section.
+        Rate-field seed of one section.
+    example : bool
+        The section is the built-in example (starts tamped unless ``[track] start`` says).
     """
     from trackdyn.deterioration.loop import LoopOptions
 
@@ -199,6 +206,7 @@ def loop_options(spec: DeteriorationScenario, seed):
         seed=seed,
         run=spec.run,
         rail=spec.track.rail,
+        start=spec.track.start or ("tamped" if example else "as measured"),
     )
 
 

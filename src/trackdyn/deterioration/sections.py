@@ -175,8 +175,12 @@ def section_tasks(spec, base: Path, progress: bool = False) -> list[SectionTask]
         Show a tonnage progress bar in each task (for in-process runs).
     """
     traffic, law = resolve_inputs(spec, base)
+
+    def options(i, example):
+        return loop_options(spec, (spec.settlement.seed, i), example)
+
     return [
-        SectionTask(s, tuple(traffic), law, loop_options(spec, (spec.settlement.seed, i)), progress)
+        SectionTask(s, tuple(traffic), law, options(i, s.geometry is None), progress)
         for i, s in enumerate(sections_of(spec, base))
     ]
 
