@@ -82,7 +82,7 @@ class LoopOptions:
     snapshot_every_mgt : float
         Tonnage between stored geometry snapshots [MGT].
     threshold_sd_mm : float
-        D1 standard deviation that triggers maintenance [mm]; default 1.5 mm, illustrative
+        D1 standard deviation that triggers maintenance [mm]; default 1.6 mm, illustrative
         (set within what the tamped example reaches in 50 MGT; a railway sets its own).
     segment_length : float
         Segment length of the D1 standard deviation [m].
@@ -114,7 +114,7 @@ class LoopOptions:
     total_mgt: float = 50.0
     max_step_settlement: float = 0.5e-3
     snapshot_every_mgt: float = 10.0
-    threshold_sd_mm: float = 1.5
+    threshold_sd_mm: float = 1.6
     segment_length: float = 200.0
     max_steps: int = 1000
     rate_cov: float = 0.3

@@ -29,7 +29,7 @@ seed = 0
 total_mgt = 50
 max_step_settlement_mm = 0.5
 snapshot_every_mgt = 10
-threshold_sd_mm = 1.5           # D1 SD that triggers maintenance (illustrative)
+threshold_sd_mm = 1.6           # D1 SD that triggers maintenance (illustrative)
 segment_length_m = 200
 max_steps = 1000
 
@@ -117,7 +117,7 @@ class LoopSpec(Strict):
     total_mgt: PositiveFloat = 50.0
     max_step_settlement_mm: PositiveFloat = 0.5
     snapshot_every_mgt: PositiveFloat = 10.0
-    threshold_sd_mm: PositiveFloat = 1.5
+    threshold_sd_mm: PositiveFloat = 1.6
     segment_length_m: PositiveFloat = 200.0
     max_steps: PositiveInt = 1000
 
