@@ -61,7 +61,7 @@ def tamped_geometry(geometry: Geometry, extent, segment_length: float,
         z = geometry.profile(rail)
         d1 = longitudinal_level(x, z, "D1")
 
-        def excess(a, z=z, d1=d1, r=r):
+        def excess(a, z=z, d1=d1, r=r, rail=rail):
             g = dataclasses.replace(geometry, **{rail: z - a * d1})
             sd = d1_sd(g, extent, segment_length)[0][r]
             return float(np.sqrt(np.mean(sd**2))) - target * 1e3
