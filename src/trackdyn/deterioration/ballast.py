@@ -23,6 +23,21 @@ The rate field: a lognormal factor per sleeper on every settlement increment, ``
 σ²/2)`` with ``σ² = ln(1 + cov²)`` and ``z`` a unit Gaussian field with correlation length
 ``ℓ`` (`trackdyn.track.synthetic.correlated_field`), the two rails' fields correlated by
 `RAIL_CORRELATION`.
+
+References
+----------
+Shenton, M.J. (1985). Ballast deformation and track deterioration. In: Track
+Technology, Thomas Telford, London, 253-265.
+
+Sato, Y. (1995). Japanese studies on deterioration of ballasted track. Vehicle System
+Dynamics 24 (suppl.), 197-208.
+
+Nielsen, J.C.O., Li, X. (2018). Railway track geometry degradation due to differential
+settlement of ballast/subgrade - Numerical prediction by an iterative procedure. Journal
+of Sound and Vibration 412, 441-456.
+
+Zhai, W.M., Wang, K.Y., Lin, J.H. (2004). Modelling and experiment of railway ballast
+vibrations. Journal of Sound and Vibration 270, 673-683.
 """
 
 from __future__ import annotations

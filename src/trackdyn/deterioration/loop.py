@@ -17,6 +17,15 @@ The step adapts so that no sleeper settles more than ``max_step_settlement`` in 
 the loads of the step start, the increment is known in closed form for any ``ΔM``, so the
 step is the largest one within the limit (found by root finding), cut to land on the
 snapshot tonnages and on ``total_mgt``.
+
+References
+----------
+Fröhling, R.D. (1997). Deterioration of railway track due to dynamic vehicle loading and
+spatially varying track stiffness. PhD thesis, University of Pretoria.
+
+Nielsen, J.C.O., Li, X. (2018). Railway track geometry degradation due to differential
+settlement of ballast/subgrade - Numerical prediction by an iterative procedure. Journal
+of Sound and Vibration 412, 441-456.
 """
 
 from __future__ import annotations

@@ -14,6 +14,12 @@ deflections at the sleepers); all positions are solved at once (batched), and th
 closed supports of each is iterated to convergence (closed where the rail reaches the
 ballast, open elsewhere), starting from the rest state's. The section is extended beyond
 its ends by copies of its end sleepers, as the track goes on beyond a section.
+
+References
+----------
+Nielsen, J.C.O., Li, X. (2018). Railway track geometry degradation due to differential
+settlement of ballast/subgrade - Numerical prediction by an iterative procedure. Journal
+of Sound and Vibration 412, 441-456.
 """
 
 from __future__ import annotations

@@ -22,6 +22,17 @@ law           ``g(N)``                                   own parameters
 (Shenton's ``k2`` is his settlement rate per cycle, not the track stiffness.) Parameter
 files give ``value``, ``unit`` and ``source`` for each parameter, one table per law; the
 shipped ``settlement.toml`` holds illustrative values that are not calibrated.
+
+References
+----------
+Shenton, M.J. (1985). Ballast deformation and track deterioration. In: Track
+Technology, Thomas Telford, London, 253-265.
+
+Sato, Y. (1995). Japanese studies on deterioration of ballasted track. Vehicle System
+Dynamics 24 (suppl.), 197-208.
+
+Varandas, J.N., Hölscher, P., Silva, M.A.G. (2014). Settlement of ballasted track under
+traffic loading: application to transition zones. Proc. IMechE Part F 228(3), 242-259.
 """
 
 from __future__ import annotations
