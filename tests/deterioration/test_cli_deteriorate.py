@@ -25,6 +25,7 @@ speed_kmh = 70
 passages_per_mgt = 8065
 [settlement]
 law = "sato"
+rate_cov = 0.0                  # uniform ballast: only the soft spot makes it uneven
 [loop]
 total_mgt = 4
 snapshot_every_mgt = 2
@@ -66,11 +67,14 @@ def test_deteriorate_writes_dataset_tables_and_figures(folder, tmp_path):
     ds = xr.load_dataset(out / "deterioration_geometry.nc")
     assert ds.settlement.attrs["units"] == "m" and float(ds.mgt[-1]) == 4.0
     assert list(ds.snapshot_mgt.values) == [0.0, 2.0, 4.0]
-    # the profile snapshots are the initial profile plus the settlement between sleepers
+    # the rail rests on its ballast: where no sleeper hangs, the profile drops with the
+    # ballast, give or take the change of its self-weight deflection (rail 60 kg/m over
+    # 0.6 m plus 125.5 kg of sleeper on 60-150 kN/mm track: < 0.05 mm in all)
+    bears = (ds.hanging_gap.isel(rail=0) == 0).all("mgt").values
+    change = ds.profile.isel(snapshot=-1, rail=0) - ds.profile.isel(snapshot=0, rail=0)
+    at_sleepers = np.interp(ds.sleeper_distance, ds.distance, change)[bears]
     np.testing.assert_allclose(
-        ds.profile.isel(snapshot=-1, rail=0) - ds.profile.isel(snapshot=0, rail=0),
-        np.interp(ds.distance, ds.sleeper_distance, ds.settlement.isel(mgt=-1, rail=0)),
-        atol=1e-8,  # geometry CSV written with 6 significant digits in mm
+        at_sleepers, ds.settlement.isel(mgt=-1, rail=0).values[bears], atol=5e-5
     )
     table = pd.read_csv(out / "maintenance.csv")
     # Both segments start level (SD 0). Only the one with the soft spot (0-60 m) settles

@@ -70,9 +70,13 @@ def test_step_size_meets_the_limit_exactly():
     n = 64520.0  # cycles per MGT: 8 wheels x 8065 passages
     limit = 0.5e-3
     expected = (((limit / (factor.max() * law.K_s) + N[0, 1] ** 0.2) ** 5) - N[0, 1]) / n
-    dm = step_size(law, factor, N, n, cap=100.0, limit=limit)
-    assert dm == pytest.approx(expected, rel=1e-9)
-    assert step_size(law, factor, N, n, cap=0.1 * expected, limit=limit) == 0.1 * expected
+
+    def increment(dm):
+        return time_hardening_increment(law, factor, N, n * dm)
+
+    dm = step_size(increment, cap=100.0, limit=limit)
+    assert dm == pytest.approx(expected, rel=1e-8)
+    assert step_size(increment, cap=0.1 * expected, limit=limit) == 0.1 * expected
 
 
 def test_shipped_file_gives_value_unit_source_and_is_labelled_illustrative():
@@ -118,3 +122,26 @@ def test_bad_law_name_value_and_file(tmp_path):
         load_law("power", gamma=1.0)
     with pytest.raises(TrackdynInputError, match="cannot read the file"):
         load_law("power", tmp_path / "missing.toml")
+
+
+def test_varandas_closed_forms():
+    """Varandas, Hölscher & Silva (2014): N0 cycles of F0 settle gamma; a second batch of
+    N cycles at F2 < F1 after N at F1 settles (gamma/M) F2^(a+1)/(a+1) (S(2N) - S(N)),
+    with M = F0^(a+1)/(a+1) S(N0) and S(N) = sum n^-beta, summed here term by term."""
+    from trackdyn.deterioration.accumulation import memory
+
+    law = load_law("varandas")
+    S = np.cumsum(np.arange(1, 2_000_001, dtype=float) ** -law.beta)  # S(n) = S[n - 1]
+    acc = memory(law, (2, 1))
+    total = 0.0
+    for dm in (0.2, 0.3, 0.5):  # N0 cycles of F0 in three steps, 1e6 cycles per MGT
+        inc = acc.prepare([(0, 1e6, np.array([law.F0]), np.array([1e8]))])
+        total += inc(dm)[0, 0]
+        acc.advance(dm)
+    assert total == pytest.approx(law.gamma, rel=1e-3)
+    F2 = 25e3  # half of F0, on the load grid
+    inc = acc.prepare([(0, 1e6, np.array([F2]), np.array([1e8]))])
+    a = law.alpha + 1
+    expect = law.gamma / (law.F0**a / a * S[1_000_000 - 1]) * F2**a / a * (S[-1] - S[999_999])
+    assert inc(1.0)[0, 0] == pytest.approx(expect, rel=1e-3)
+    assert inc(1.0)[0, 0] < 0.1 * total  # loads below those already seen add little

@@ -5,13 +5,14 @@ parameters; `trackdyn.deterioration.sections` reads scenario files and runs many
 through Dask.
 """
 
-from trackdyn.deterioration.loop import LoopOptions, Traffic, predict, settled_geometry
+from trackdyn.deterioration.loop import LoopOptions, Traffic, predict
 from trackdyn.deterioration.settlement import (
     LAWS,
     PowerLaw,
     SatoLaw,
     SettlementLaw,
     ShentonLaw,
+    VarandasLaw,
     load_law,
     time_hardening_increment,
 )
@@ -24,8 +25,8 @@ __all__ = [
     "SettlementLaw",
     "ShentonLaw",
     "Traffic",
+    "VarandasLaw",
     "load_law",
     "predict",
-    "settled_geometry",
     "time_hardening_increment",
 ]

@@ -1,40 +1,52 @@
-"""The deterioration loop: dynamic loads -> sleeper settlement -> new geometry -> loads.
+"""The deterioration loop: dynamic loads -> rail-seat loads -> ballast settlement -> track.
 
-One tonnage step: every vehicle of the traffic runs over the current geometry
-(`trackdyn.simulation.simulate` on the track linearised once per vehicle: the stiffness stays
-as measured, only the space curve changes); its wheel loads become rail-seat loads
-(`trackdyn.deterioration.loads`); the settlement law turns them into settlement of each
-sleeper and rail; the settlement is added (positive down) to the unloaded space curve of
-its rail, interpolated linearly between sleepers onto the geometry grid.
+One tonnage step: every vehicle of the traffic runs over the current track (unloaded
+profile and linearisation re-derived from the rail beam on the current ballast,
+`trackdyn.deterioration.ballast`); each wheel's loads, placed on the rail beam with the
+current gaps, give the rail-seat load cycles of every sleeper
+(`trackdyn.deterioration.loads`); the settlement law turns them into ballast settlement
+under each rail seat (`trackdyn.deterioration.accumulation`), times the sleeper's
+settlement-rate factor; the ballast level drops by it, the rail comes to rest on the new
+ballast (hanging where it cannot reach), and the next step starts from there.
 
-Mixed traffic (the rule used here): in a step of ``ΔM`` MGT, sleeper ``i`` of rail ``r``
-receives ``ΔN = ΔM Σ_j n_j`` cycles, ``n_j`` the cycles per MGT of load level ``j`` (each
-contact of each vehicle: passages per MGT times the wheels it stands for). The cycles of
-each level advance the common cycle count in proportion, so the time-hardening increment
-is ``Δe = Σ_j (n_j / Σ n) f(Q_j) (g(N + ΔN) - g(N))``: the cycle-weighted mean load factor
-times the advance on the cycle curve. For one load level it is the time-hardening rule.
+Mixed traffic: in a step of ``ΔM`` MGT each wheel of each vehicle applies its passages per
+MGT times ``ΔM`` cycles at every sleeper of its rail, with the load it had there at the
+step start; see `trackdyn.deterioration.accumulation` for how each law sums them.
 
 The step adapts so that no sleeper settles more than ``max_step_settlement`` in it: with
 the loads of the step start, the increment is known in closed form for any ``ΔM``, so the
 step is the largest one within the limit (found by root finding), cut to land on the
 snapshot tonnages and on ``total_mgt``.
+
+References
+----------
+Fröhling, R.D. (1997). Deterioration of railway track due to dynamic vehicle loading and
+spatially varying track stiffness. PhD thesis, University of Pretoria.
+
+Nielsen, J.C.O., Li, X. (2018). Railway track geometry degradation due to differential
+settlement of ballast/subgrade - Numerical prediction by an iterative procedure. Journal
+of Sound and Vibration 412, 441-456.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import time
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import brentq
 
-from trackdyn.deterioration.loads import TrafficRun, step_loads
+from trackdyn.deterioration.accumulation import memory
+from trackdyn.deterioration.ballast import Ballast, rate_field
+from trackdyn.deterioration.loads import TrafficRun
 from trackdyn.deterioration.results import d1_sd, make_dataset
-from trackdyn.deterioration.settlement import SettlementLaw, time_hardening_increment
+from trackdyn.deterioration.tamping import STARTS, tamped_geometry
 from trackdyn.errors import TrackdynInputError, require_positive
 from trackdyn.options import RunOptions
 from trackdyn.progress import progress_bar
 from trackdyn.track.rails import rail_section
-from trackdyn.track.track import RAILS, Geometry, Track
+from trackdyn.track.track import RAILS, Track
 from trackdyn.vehicle.parameters import Vehicle
 
 
@@ -79,15 +91,23 @@ class LoopOptions:
     snapshot_every_mgt : float
         Tonnage between stored geometry snapshots [MGT].
     threshold_sd_mm : float
-        D1 standard deviation that triggers maintenance [mm].
+        D1 standard deviation that triggers maintenance [mm]; default 1.6 mm, illustrative
+        (set within what the tamped example reaches in 50 MGT; a railway sets its own).
     segment_length : float
         Segment length of the D1 standard deviation [m].
     max_steps : int
         Steps allowed before giving up.
-    scatter_cov : float
-        Coefficient of variation of a lognormal factor on each sleeper's settlement [-].
+    rate_cov : float
+        Coefficient of variation of the lognormal settlement-rate factor per sleeper [-];
+        default 0.3, illustrative (an engineering estimate, not a published value).
+    rate_correlation_length : float
+        Correlation length of that factor along the track [m]; default 3 m, illustrative
+        (an engineering estimate: a few sleepers).
     seed : int or tuple of int
-        Seed of that scatter.
+        Seed of the rate field.
+    sleeper_mass : float
+        Sleeper mass per rail seat, hanging from the rail when its ballast sinks [kg];
+        default 125.5 kg, the half-sleeper mass of Zhai et al. (2004).
     run : RunOptions
         Model (with wheels on both rails), linearisation increment, time step and solver
         of the vehicle runs; each vehicle's speed comes from its `Traffic`.
@@ -95,34 +115,38 @@ class LoopOptions:
         Rail section, for the bending stiffness EI of the load distribution.
     output_spacing : float
         Travel between stored simulation samples [m] (sets ``store_every``).
+    start : str
+        ``"as measured"``: the track as its files give it; ``"tamped"``: freshly tamped
+        (`trackdyn.deterioration.tamping`: most of the D1 band removed, sleepers seated).
     """
 
     total_mgt: float = 50.0
     max_step_settlement: float = 0.5e-3
     snapshot_every_mgt: float = 10.0
-    threshold_sd_mm: float = 2.0
+    threshold_sd_mm: float = 1.6
     segment_length: float = 200.0
     max_steps: int = 1000
-    scatter_cov: float = 0.0
+    rate_cov: float = 0.3
+    rate_correlation_length: float = 3.0
     seed: int | tuple[int, ...] = 0
+    sleeper_mass: float = 125.5
     run: RunOptions = RunOptions()
     rail: str = "60E1"
     output_spacing: float = 0.02
+    start: str = "as measured"
 
 
-def step_size(law, factor, N, cycles_per_mgt, cap: float, limit: float) -> float:
+NO_TRAFFIC_LOAD = 100e3
+"""Static wheel load the beam is set up for when no vehicle runs [N] (nothing settles)."""
+
+
+def step_size(increment, cap: float, limit: float) -> float:
     """Largest tonnage step up to ``cap`` [MGT] in which no sleeper settles over ``limit``.
 
     Parameters
     ----------
-    law : SettlementLaw
-        Settlement law.
-    factor : ndarray
-        Load factor of each sleeper for the step [-].
-    N : ndarray
-        Cycles applied so far [-].
-    cycles_per_mgt : ndarray
-        Cycles per MGT [-].
+    increment : callable
+        Settlement increment per rail and sleeper [m] as a function of the step [MGT].
     cap : float
         Longest step allowed [MGT].
     limit : float
@@ -130,31 +154,14 @@ def step_size(law, factor, N, cycles_per_mgt, cap: float, limit: float) -> float
     """
 
     def excess(dm):
-        return np.max(time_hardening_increment(law, factor, N, cycles_per_mgt * dm)) - limit
+        return np.max(increment(dm)) - limit
 
     if excess(cap) <= 0:
         return cap
     return brentq(excess, 0.0, cap, xtol=1e-14 * cap, rtol=1e-12)
 
 
-def settled_geometry(geometry: Geometry, position, settlement) -> Geometry:
-    """Unloaded space curve plus the settlement of each rail, interpolated between sleepers.
-
-    Parameters
-    ----------
-    geometry : Geometry
-        Initial unloaded space curve.
-    position : ndarray
-        Sleeper positions [m].
-    settlement : ndarray
-        Settlement per rail and sleeper, positive down [m].
-    """
-    g = geometry
-    left, right = (np.interp(g.distance, position, s) for s in settlement)
-    return Geometry(g.distance, g.left + left, g.right + right, g.where)
-
-
-def predict(track: Track, traffic, law: SettlementLaw, options=None, *, progress=False):
+def predict(track: Track, traffic, law, options=None, *, progress=False):
     """Predict settlement and geometry of a track section over accumulated tonnage.
 
     Parameters
@@ -163,8 +170,8 @@ def predict(track: Track, traffic, law: SettlementLaw, options=None, *, progress
         Measured track section (initial geometry and support curves).
     traffic : sequence of Traffic
         The traffic mix; an empty mix causes no settlement.
-    law : SettlementLaw
-        Settlement law with its parameters.
+    law : LawParameters
+        Settlement law with its parameters (`trackdyn.deterioration.settlement.LAWS`).
     options : LoopOptions, optional
         Loop options; default `LoopOptions()`.
     progress : bool
@@ -175,21 +182,38 @@ def predict(track: Track, traffic, law: SettlementLaw, options=None, *, progress
     xarray.Dataset
         See `trackdyn.deterioration.results.make_dataset`.
     """
+    t0 = time.perf_counter()
     o = options or LoopOptions()
     total = float(require_positive("total_mgt", o.total_mgt))
     limit = float(require_positive("max_step_settlement", o.max_step_settlement))
     every = float(require_positive("snapshot_every_mgt", o.snapshot_every_mgt))
-    if not 0 <= o.scatter_cov < np.inf:
-        raise TrackdynInputError(f"scatter_cov must be >= 0, got {o.scatter_cov!r}")
     d1_sd(track.geometry, track.extent, o.segment_length)  # refuses too short a section now
-    runs = _runs(track, traffic, o)
+    if o.start not in STARTS:
+        raise TrackdynInputError(f"start must be one of {', '.join(STARTS)}; got {o.start!r}")
+    seated = o.start == "tamped"
+    if seated:
+        tamped = tamped_geometry(track.geometry, track.extent, o.segment_length)
+        track = dataclasses.replace(track, geometry=tamped)
     pos = track.supports.position
     shape = (len(RAILS), pos.size)
-    sigma = np.sqrt(np.log1p(o.scatter_cov**2))
-    scatter = np.exp(sigma * np.random.default_rng(o.seed).standard_normal(shape) - sigma**2 / 2)
+    rate = rate_field(pos.size, float(np.median(np.diff(pos))), o.rate_cov,
+                      o.rate_correlation_length, o.seed)  # fmt: skip
+    runs, lins = _runs(track, traffic, o)
+    base = (
+        lins[max(lins)]
+        if lins
+        else track.linearise(NO_TRAFFIC_LOAD, o.run.delta, extrapolate=o.run.extrapolate)
+    )
+    timing = {"vehicle": 0.0, "beam": 0.0}
+    clock = time.perf_counter()
+    ballast = Ballast(base, rail_section(o.rail), o.sleeper_mass, seated=seated)
+    state = ballast.initial
+    timing["beam"] += time.perf_counter() - clock
+    acc = memory(law, shape)
     snap_at = np.append(np.arange(0.0, total, every), total)
-    e, N, mgt = np.zeros(shape), np.zeros(shape), 0.0
-    history = {"mgt": [0.0], "settlement": [e], "geometry": [track.geometry]}
+    level, mgt, geometry = np.zeros(shape), 0.0, track.geometry
+    history = {"mgt": [0.0], "settlement": [level], "geometry": [geometry],
+               "hanging_gap": [state.hanging_gap]}  # fmt: skip
     steps = {"start": [], "end": [], "peak_load": [], "max_settlement": []}
     with progress_bar(progress, total, "tonnage [MGT]") as bar:
         while mgt < total:
@@ -198,27 +222,42 @@ def predict(track: Track, traffic, law: SettlementLaw, options=None, *, progress
                     f"more than max_steps = {o.max_steps} steps needed to reach {total:g} MGT "
                     f"(at {mgt:.3g} MGT); raise max_step_settlement or max_steps"
                 )
-            factor, cycles, peak = step_loads(runs, history["geometry"][-1], law, shape)
-            factor = factor * scatter
+            clock = time.perf_counter()
+            current = {p: ballast.linearised(lin, state, geometry) for p, lin in lins.items()}
+            timing["beam"] += time.perf_counter() - clock
+            cycles, peak = [], np.zeros(shape)
+            for run in runs:
+                lin = current[run.lin.static_load]
+                loads = run.loads(lin, ballast, state, timing)
+                for q, r, w in zip(loads, run.rails, run.weights, strict=True):
+                    cycles.append((r, w, q, lin.k2[r]))
+                    peak[r] = np.maximum(peak[r], q)
+            increment = acc.prepare(cycles)
             target = snap_at[np.searchsorted(snap_at, mgt, side="right")]
-            dm = step_size(law, factor, N, cycles, target - mgt, limit)
-            de = time_hardening_increment(law, factor, N, cycles * dm)
-            e, N = e + de, N + cycles * dm
+            dm = step_size(lambda d, inc=increment: rate * inc(d), target - mgt, limit)
+            de = rate * increment(dm)
+            acc.advance(dm)
+            level = level + de
+            clock = time.perf_counter()
+            state = ballast.state(level, state)
+            geometry = ballast.geometry(track.geometry, state)
+            timing["beam"] += time.perf_counter() - clock
             steps["start"].append(mgt)
             mgt = target if target - (mgt + dm) <= 1e-12 * total else mgt + dm
             steps["end"].append(mgt)
             steps["peak_load"].append(peak)
             steps["max_settlement"].append(float(de.max()))
-            history["mgt"].append(mgt)
-            history["settlement"].append(e)
-            history["geometry"].append(settled_geometry(track.geometry, pos, e))
+            for key, value in (("mgt", mgt), ("settlement", level), ("geometry", geometry),
+                               ("hanging_gap", state.hanging_gap)):  # fmt: skip
+                history[key].append(value)
             bar.update(mgt)
-    return make_dataset(track, history, steps, snap_at, N, traffic, law, o)
+    timing["total"] = time.perf_counter() - t0
+    return make_dataset(track, history, steps, snap_at, acc.N, rate, timing, traffic, law, o)
 
 
-def _runs(track: Track, traffic, o: LoopOptions) -> list[TrafficRun]:
-    """One `TrafficRun` per vehicle with traffic; the track is linearised once per static load."""
-    EI = rail_section(o.rail).EI
+def _runs(track: Track, traffic, o: LoopOptions):
+    """One `TrafficRun` per vehicle with traffic, and the measured track linearised once
+    per static wheel load ({load [N]: LinearisedTrack})."""
     lins, runs = {}, []
     for t in traffic:
         if not 0 <= t.passages_per_mgt < np.inf:
@@ -228,5 +267,5 @@ def _runs(track: Track, traffic, o: LoopOptions) -> list[TrafficRun]:
             load = t.vehicle.static_wheel_load
             if load not in lins:
                 lins[load] = track.linearise(load, o.run.delta, extrapolate=o.run.extrapolate)
-            runs.append(TrafficRun(t, lins[load], o, EI))
-    return runs
+            runs.append(TrafficRun(t, lins[load], o))
+    return runs, lins

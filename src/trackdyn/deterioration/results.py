@@ -10,6 +10,9 @@ import xarray as xr
 from trackdyn.track.quality import longitudinal_level, segment_sd
 from trackdyn.track.track import RAILS
 
+HANGING_GAP = 0.1e-3
+"""Gap above which a sleeper counts as hanging in ``hanging_sleepers`` [m]."""
+
 
 def d1_sd(geometry, extent, segment_length: float):
     """D1 standard deviation of each rail per segment [mm], and the segment bounds [m].
@@ -65,10 +68,16 @@ def trigger_mgt(mgt, sd, threshold: float):
     return out
 
 
-def make_dataset(track, history, steps, snap_at, cycles, traffic, law, options) -> xr.Dataset:
+def make_dataset(
+    track, history, steps, snap_at, cycles, rate, timing, traffic, law, options
+) -> xr.Dataset:
     """Assemble the loop's record into a Dataset with units in the attributes.
 
-    Variables: ``settlement`` (mgt, rail, sleeper) [m], positive down; ``d1_sd`` (mgt, rail,
+    Variables: ``settlement`` (mgt, rail, sleeper) [m], ballast settlement under each
+    rail seat, positive down; ``hanging_gap`` (mgt, rail, sleeper) [m], the gap under each
+    sleeper with the rail at rest (0 where it bears); ``hanging_sleepers`` (mgt, rail),
+    sleepers with a gap over `HANGING_GAP`; ``rate_factor`` (rail, sleeper) [-], the
+    settlement-rate factor; ``d1_sd`` (mgt, rail,
     segment) [mm]; ``trigger_mgt`` (rail, segment) [MGT], when the D1 SD first reaches
     ``threshold_sd_mm`` (inf: not within the horizon), and ``trigger_mgt_any_rail``
     (segment); ``profile`` (snapshot, rail, distance) [m], the unloaded space curve at the
@@ -81,13 +90,18 @@ def make_dataset(track, history, steps, snap_at, cycles, traffic, law, options) 
     track : Track
         The section as measured (initial geometry, supports).
     history : dict
-        ``mgt`` [MGT], ``settlement`` [m] and ``geometry`` after each step, initial first.
+        ``mgt`` [MGT], ``settlement`` [m], ``geometry`` and ``hanging_gap`` [m] after each
+        step, initial first.
     steps : dict
         ``start``, ``end`` [MGT], ``peak_load`` [N] and ``max_settlement`` [m] per step.
     snap_at : ndarray
         Snapshot tonnages, each one of ``history["mgt"]`` [MGT].
     cycles : ndarray
         Load cycles applied per rail and sleeper [-].
+    rate : ndarray
+        Settlement-rate factor per rail and sleeper [-].
+    timing : dict
+        Seconds spent in ``vehicle`` runs, ``beam`` solves and in ``total``.
     traffic : sequence of Traffic
         The traffic mix.
     law : SettlementLaw
@@ -134,6 +148,21 @@ def make_dataset(track, history, steps, snap_at, cycles, traffic, law, options) 
                 profiles,
                 {"units": "m", "long_name": "unloaded vertical space curve", "positive": "down"},
             ),
+            "hanging_gap": (
+                ("mgt", "rail", "sleeper"),
+                np.array(history["hanging_gap"]),
+                {"units": "m", "long_name": "gap under the sleeper with the rail at rest"},
+            ),
+            "hanging_sleepers": (
+                ("mgt", "rail"),
+                np.sum(np.array(history["hanging_gap"]) > HANGING_GAP, axis=-1),
+                {"units": "1", "long_name": f"sleepers hanging by more than {HANGING_GAP} m"},
+            ),
+            "rate_factor": (
+                ("rail", "sleeper"),
+                rate,
+                {"units": "1", "long_name": "settlement-rate factor of the ballast"},
+            ),
             "load_cycles": (("rail", "sleeper"), cycles, {"units": "1"}),
             "step_start": ("step", np.array(steps["start"]), {"units": "MGT"}),
             "step_end": ("step", np.array(steps["end"]), {"units": "MGT"}),
@@ -169,6 +198,9 @@ def make_dataset(track, history, steps, snap_at, cycles, traffic, law, options) 
                 t.gross_mass / 1e3 * t.passages_per_mgt for t in traffic
             ),
             "steps": n_steps,
+            "time_vehicle_runs_s": timing["vehicle"],
+            "time_beam_solves_s": timing["beam"],
+            "time_bookkeeping_s": timing["total"] - timing["vehicle"] - timing["beam"],
             "geometry_source": g0.where,
             "supports_source": track.supports.where,
             **{

@@ -18,17 +18,18 @@ speed_kmh = 60
 passages_per_mgt = 8065
 
 [settlement]
-law = "power"                   # power, shenton or sato
+law = "power"                   # power, shenton, sato or varandas
 # file = "settlement.toml"      # default: the shipped illustrative, uncalibrated values
 overrides = {}                  # law parameters, SI units
-scatter_cov = 0.0               # lognormal scatter of each sleeper's settlement
+rate_cov = 0.3                  # lognormal settlement-rate factor per sleeper (illustrative)
+rate_correlation_length_m = 3   # its correlation length along the track (illustrative)
 seed = 0
 
 [loop]
 total_mgt = 50
 max_step_settlement_mm = 0.5
 snapshot_every_mgt = 10
-threshold_sd_mm = 3.0           # D1 SD that triggers maintenance
+threshold_sd_mm = 1.6           # D1 SD that triggers maintenance (illustrative)
 segment_length_m = 200
 max_steps = 1000
 
@@ -37,12 +38,15 @@ geometry = "geometry.csv"
 supports = "supports.csv"
 # sections = "sections.csv"     # or a list of sections: name,geometry,supports
 rail = "60E1"                   # rail section for the load distribution (EI)
+start = "as measured"           # or "tamped"; default: tamped for the built-in example,
+                                # as measured for track files
 ```
 """
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Literal
 
 from pydantic import (
     Field,
@@ -84,13 +88,15 @@ DEFAULT_TRAFFIC = [
 
 
 class SettlementSpec(Strict):
-    """``[settlement]``: ``law`` name, parameter ``file``, ``overrides`` [SI], lognormal
-    ``scatter_cov`` [-] of each sleeper's settlement and its ``seed``."""
+    """``[settlement]``: ``law`` name, parameter ``file``, ``overrides`` [SI], the lognormal
+    settlement-rate field's ``rate_cov`` [-], ``rate_correlation_length_m`` [m] and
+    ``seed``."""
 
     law: str = "power"
     file: Path | None = None
     overrides: dict[str, float] = Field(default_factory=dict)
-    scatter_cov: NonNegativeFloat = 0.0
+    rate_cov: NonNegativeFloat = 0.3
+    rate_correlation_length_m: PositiveFloat = 3.0
     seed: int = Field(0, ge=0)
 
     @field_validator("law")
@@ -111,19 +117,21 @@ class LoopSpec(Strict):
     total_mgt: PositiveFloat = 50.0
     max_step_settlement_mm: PositiveFloat = 0.5
     snapshot_every_mgt: PositiveFloat = 10.0
-    threshold_sd_mm: PositiveFloat = 3.0
+    threshold_sd_mm: PositiveFloat = 1.6
     segment_length_m: PositiveFloat = 200.0
     max_steps: PositiveInt = 1000
 
 
 class TrackSectionsSpec(Strict):
     """``[track]``: ``geometry`` and ``supports`` CSV files, or a ``sections`` CSV list;
-    ``rail`` section for the bending stiffness EI."""
+    ``rail`` section for the bending stiffness EI; ``start``, ``"tamped"`` or ``"as
+    measured"`` (default: tamped for the built-in example, as measured for files)."""
 
     geometry: Path | None = None
     supports: Path | None = None
     sections: Path | None = None
     rail: str = "60E1"
+    start: Literal["tamped", "as measured"] | None = None
 
     @model_validator(mode="after")
     def _one_source(self):
@@ -171,7 +179,7 @@ def load_deterioration(path=None) -> tuple[DeteriorationScenario, Path]:
     return spec, path.resolve().parent
 
 
-def loop_options(spec: DeteriorationScenario, seed):
+def loop_options(spec: DeteriorationScenario, seed, example: bool = False):
     """`LoopOptions` of a scenario.
 
     Parameters
@@ -179,7 +187,9 @@ def loop_options(spec: DeteriorationScenario, seed):
     spec : DeteriorationScenario
         The scenario.
     seed : int or tuple of int
-        Scatter seed of one section.
+        Rate-field seed of one section.
+    example : bool
+        The section is the built-in example (starts tamped unless ``[track] start`` says).
     """
     from trackdyn.deterioration.loop import LoopOptions
 
@@ -191,10 +201,12 @@ def loop_options(spec: DeteriorationScenario, seed):
         threshold_sd_mm=lp.threshold_sd_mm,
         segment_length=lp.segment_length_m,
         max_steps=lp.max_steps,
-        scatter_cov=spec.settlement.scatter_cov,
+        rate_cov=spec.settlement.rate_cov,
+        rate_correlation_length=spec.settlement.rate_correlation_length_m,
         seed=seed,
         run=spec.run,
         rail=spec.track.rail,
+        start=spec.track.start or ("tamped" if example else "as measured"),
     )
 
 

@@ -9,7 +9,7 @@ to the CSV file::
 
 Each section's whole loop is one task of `trackdyn.parallel.run_tasks`; the task
 carries the file paths, the traffic, the law and the options, never the track arrays.
-The scatter seed of section ``i`` is ``(seed, i)``, so results do not depend on how the
+The rate-field seed of section ``i`` is ``(seed, i)``, so results do not depend on how the
 sections are spread over workers.
 """
 
@@ -125,7 +125,7 @@ class SectionTask:
     law : SettlementLaw
         The settlement law.
     options : LoopOptions
-        The loop options, with this section's scatter seed.
+        The loop options, with this section's rate-field seed.
     progress : bool
         Show a tonnage progress bar (in-process runs).
     """
@@ -175,8 +175,12 @@ def section_tasks(spec, base: Path, progress: bool = False) -> list[SectionTask]
         Show a tonnage progress bar in each task (for in-process runs).
     """
     traffic, law = resolve_inputs(spec, base)
+
+    def options(i, example):
+        return loop_options(spec, (spec.settlement.seed, i), example)
+
     return [
-        SectionTask(s, tuple(traffic), law, loop_options(spec, (spec.settlement.seed, i)), progress)
+        SectionTask(s, tuple(traffic), law, options(i, s.geometry is None), progress)
         for i, s in enumerate(sections_of(spec, base))
     ]
 

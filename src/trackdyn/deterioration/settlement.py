@@ -22,6 +22,17 @@ law           ``g(N)``                                   own parameters
 (Shenton's ``k2`` is his settlement rate per cycle, not the track stiffness.) Parameter
 files give ``value``, ``unit`` and ``source`` for each parameter, one table per law; the
 shipped ``settlement.toml`` holds illustrative values that are not calibrated.
+
+References
+----------
+Shenton, M.J. (1985). Ballast deformation and track deterioration. In: Track
+Technology, Thomas Telford, London, 253-265.
+
+Sato, Y. (1995). Japanese studies on deterioration of ballasted track. Vehicle System
+Dynamics 24 (suppl.), 197-208.
+
+Varandas, J.N., Hölscher, P., Silva, M.A.G. (2014). Settlement of ballasted track under
+traffic loading: application to transition zones. Proc. IMechE Part F 228(3), 242-259.
 """
 
 from __future__ import annotations
@@ -45,8 +56,35 @@ COMMON = {"Q_ref": "N", "load_exponent": "-", "k_ref": "N/m", "stiffness_exponen
 
 
 @dataclass(frozen=True, kw_only=True)
-class SettlementLaw:
-    """Base of the laws: the load and stiffness factor; subclasses add ``g(N)``.
+class LawParameters:
+    """Base of all laws: checks that every parameter is a finite number in range."""
+
+    units: ClassVar[dict[str, str]] = {}
+    """The law's own parameters and their SI units."""
+    common: ClassVar[dict[str, str]] = {}
+    """Parameters shared with other laws and their SI units."""
+    positive: ClassVar[tuple[str, ...]] = ()
+    non_negative: ClassVar[tuple[str, ...]] = ()
+
+    def __post_init__(self):
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise TrackdynInputError(f"settlement parameter {f.name} must be a number")
+            if not math.isfinite(value):
+                raise TrackdynInputError(f"settlement parameter {f.name} must be finite")
+        for name in self.positive:
+            if getattr(self, name) <= 0:
+                raise TrackdynInputError(f"settlement parameter {name} must be > 0")
+        for name in self.non_negative:
+            if getattr(self, name) < 0:
+                raise TrackdynInputError(f"settlement parameter {name} must be >= 0")
+
+
+@dataclass(frozen=True, kw_only=True)
+class SettlementLaw(LawParameters):
+    """Base of the laws ``e = f(Q, k2) g(N)``: the load and stiffness factor; subclasses
+    add ``g(N)``.
 
     Parameters
     ----------
@@ -65,24 +103,13 @@ class SettlementLaw:
     k_ref: float
     stiffness_exponent: float
 
-    units: ClassVar[dict[str, str]] = {}
-    """The law's own parameters and their SI units."""
-    positive: ClassVar[tuple[str, ...]] = ()
-    non_negative: ClassVar[tuple[str, ...]] = ()
+    common: ClassVar[dict[str, str]] = COMMON
 
     def __post_init__(self):
-        for f in fields(self):
-            value = getattr(self, f.name)
-            if isinstance(value, bool) or not isinstance(value, int | float):
-                raise TrackdynInputError(f"settlement parameter {f.name} must be a number")
-            if not math.isfinite(value):
-                raise TrackdynInputError(f"settlement parameter {f.name} must be finite")
-        for name in ("Q_ref", "k_ref", *self.positive):
+        super().__post_init__()
+        for name in ("Q_ref", "k_ref"):
             if getattr(self, name) <= 0:
                 raise TrackdynInputError(f"settlement parameter {name} must be > 0")
-        for name in self.non_negative:
-            if getattr(self, name) < 0:
-                raise TrackdynInputError(f"settlement parameter {name} must be >= 0")
 
     def load_factor(self, Q, k2):
         """``f(Q, k2) = (Q/Q_ref)^load_exponent (k2/k_ref)^stiffness_exponent`` [-].
@@ -192,7 +219,117 @@ class SatoLaw(SettlementLaw):
         return -self.gamma * np.expm1(-self.alpha * n) + self.beta * n
 
 
-LAWS: dict[str, type[SettlementLaw]] = {"power": PowerLaw, "shenton": ShentonLaw, "sato": SatoLaw}
+def harmonic(h, beta: float):
+    """``S(h) = sum_{n=1}^{h} n^(-beta)``, continued to real ``h >= 0`` [-].
+
+    ``S(h) = zeta(beta) - zeta(beta, h + 1)`` with the Hurwitz zeta function, from its
+    Euler-Maclaurin expansion after shifting the argument to 9 or more (error below 1e-9
+    relative for ``0 < beta < 1``).
+
+    Parameters
+    ----------
+    h : array_like
+        Number of cycles, >= 0 [-].
+    beta : float
+        Exponent, 0 < beta < 1 [-].
+    """
+    h = np.asarray(h, dtype=float)
+    return (_hurwitz(beta, 1.0)[0] - _hurwitz(beta, h + 1.0)).reshape(h.shape)
+
+
+def _hurwitz(s: float, a):
+    """Hurwitz zeta ``zeta(s, a)`` for 0 < s < 1, a >= 1, by analytic continuation."""
+    a = np.array(a, dtype=float, ndmin=1)
+    out = np.zeros_like(a)
+    small = a < 9.0
+    shift = np.zeros(np.count_nonzero(small))
+    q = a[small]
+    for _ in range(9):
+        shift += q**-s
+        q = q + 1.0
+    a[small] = q
+    tail = (a ** (1 - s) / (s - 1) + a**-s / 2 + s * a ** (-s - 1) / 12
+            - s * (s + 1) * (s + 2) * a ** (-s - 3) / 720
+            + s * (s + 1) * (s + 2) * (s + 3) * (s + 4) * a ** (-s - 5) / 30240)  # fmt: skip
+    out[:] = tail
+    out[small] += shift
+    return out
+
+
+@dataclass(frozen=True, kw_only=True)
+class VarandasLaw(LawParameters):
+    """Varandas et al. (2014): settlement per cycle driven by loads above those seen.
+
+    The settlement of cycle ``n`` with peak load ``F_n`` is
+    ``du = (gamma / M) int_0^F_n F^alpha (1 / (h(F) + 1))^beta dF`` with ``h(F)`` the
+    number of earlier cycles whose peak reached ``F``, and
+    ``M = F0^(alpha + 1) / (alpha + 1) S(N0)``, ``S`` the `harmonic` sum; so ``N0`` cycles
+    of ``F0`` settle ``gamma``, and ``N`` cycles of a constant ``F`` settle
+    ``gamma (F/F0)^(alpha + 1) S(N) / S(N0)``. A load below all earlier ones adds little,
+    one above them adds as on fresh ballast. Integrated over tonnage steps by
+    `trackdyn.deterioration.accumulation.LoadHistory`.
+
+    Parameters
+    ----------
+    alpha : float
+        Load exponent of the integrand [-].
+    beta : float
+        Cycle exponent, 0 < beta < 1 [-].
+    gamma : float
+        Settlement after ``N0`` cycles of ``F0`` [m].
+    F0 : float
+        Reference load [N].
+    N0 : float
+        Reference number of cycles [-].
+
+    References
+    ----------
+    Varandas, J.N., Hölscher, P., Silva, M.A.G. (2014). Settlement of ballasted track under
+    traffic loading: application to transition zones. Proceedings of the Institution of
+    Mechanical Engineers, Part F: Journal of Rail and Rapid Transit 228(3), 242-259.
+    """
+
+    alpha: float
+    beta: float
+    gamma: float
+    F0: float
+    N0: float
+    units: ClassVar[dict[str, str]] = {"alpha": "-", "beta": "-", "gamma": "m", "F0": "N",
+                                       "N0": "-"}  # fmt: skip
+    positive: ClassVar[tuple[str, ...]] = ("beta", "gamma", "F0", "N0")
+    non_negative: ClassVar[tuple[str, ...]] = ("alpha",)
+
+    def __post_init__(self):
+        super().__post_init__()
+        if self.beta >= 1:
+            raise TrackdynInputError("settlement parameter beta must be < 1")
+
+    @property
+    def M(self) -> float:
+        """Normalising constant ``F0^(alpha + 1) / (alpha + 1) S(N0)`` [N^(alpha + 1)]."""
+        a = self.alpha + 1
+        return float(self.F0**a / a * harmonic(self.N0, self.beta))
+
+    def constant_load(self, F, N):
+        """Settlement after ``N`` cycles of the constant peak load ``F`` [m] (closed form).
+
+        Parameters
+        ----------
+        F : array_like
+            Peak rail-seat load [N].
+        N : array_like
+            Cycles [-].
+        """
+        S = harmonic(N, self.beta) / harmonic(self.N0, self.beta)
+        return self.gamma * (np.asarray(F, dtype=float) / self.F0) ** (self.alpha + 1) * S
+
+
+LAWS: dict[str, type[LawParameters]] = {
+    "power": PowerLaw,
+    "shenton": ShentonLaw,
+    "sato": SatoLaw,
+    "varandas": VarandasLaw,
+}
 """Registry of settlement laws by name; add an entry to plug in another law."""
 
 
@@ -217,7 +354,7 @@ def time_hardening_increment(law: SettlementLaw, factor, N, dN):
     return np.asarray(factor) * (law.cycles(N + dN) - law.cycles(N))
 
 
-def load_law(name: str, path=None, **overrides) -> SettlementLaw:
+def load_law(name: str, path=None, **overrides) -> LawParameters:
     """A settlement law with parameters from a TOML file.
 
     Parameters
@@ -237,7 +374,7 @@ def load_law(name: str, path=None, **overrides) -> SettlementLaw:
     data = read_toml(path if path is not None else DEFAULT_FILE)
     if name not in data or not isinstance(data[name], dict):
         raise TrackdynInputError(f"{where}: no table [{name}] for the {name} law")
-    expected = {**COMMON, **cls.units}
+    expected = {**cls.common, **cls.units}
     values = {}
     for key, entry in data[name].items():
         if key == "description":

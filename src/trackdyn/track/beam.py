@@ -135,11 +135,72 @@ def linear_supports(position, stiffness, gap=0.0, *, tensionless=True) -> Suppor
     return SupportCurves(pos, d, f, tensionless=bool(tensionless))
 
 
-def _hermite(s, length):
-    """Cubic Hermite shape functions (w1, theta1, w2, theta2) at local coordinate ``s``."""
+def hermite(s, length):
+    """Cubic Hermite shape functions of a beam element.
+
+    Parameters
+    ----------
+    s : array_like
+        Local coordinate, 0 at the first node and 1 at the second [-].
+    length : array_like
+        Element length, broadcast against ``s`` [m].
+
+    Returns
+    -------
+    ndarray, shape (4,) + broadcast shape
+        Shape functions of (w1, theta1, w2, theta2): the deflection at ``s`` per unit nodal
+        deflection [-] and per unit nodal rotation [m].
+    """
     s2, s3 = s * s, s * s * s
     return np.stack([1 - 3 * s2 + 2 * s3, length * (s - 2 * s2 + s3), 3 * s2 - 2 * s3,
                      length * (s3 - s2)])  # fmt: skip
+
+
+_KE = np.array([[12, 6, -12, 6], [6, 4, -6, 2], [-12, -6, 12, -6], [6, 2, -6, 4]], dtype=float)
+_POWER = np.array([0, 1, 0, 1]) - 1.5  # K[i, j] = EI ke[i, j] L^(power[i] + power[j])
+
+
+def element_stiffness(length, EI):
+    """Stiffness matrices of Euler-Bernoulli (Hermite cubic) beam elements.
+
+    Parameters
+    ----------
+    length : array_like
+        Element lengths [m].
+    EI : float
+        Bending stiffness [N m^2].
+
+    Returns
+    -------
+    ndarray, shape ``length.shape + (4, 4)``
+        In the order (w1, theta1, w2, theta2) [N/m, N, N m].
+    """
+    L = np.asarray(length, dtype=float)[..., None, None]
+    return EI * _KE * L ** (_POWER[:, None] + _POWER[None, :])
+
+
+def stiffness_band(x, EI):
+    """Beam stiffness of a rail with nodes ``x``, in LAPACK upper banded form.
+
+    Parameters
+    ----------
+    x : array_like
+        Node positions, strictly increasing [m].
+    EI : float
+        Bending stiffness [N m^2].
+
+    Returns
+    -------
+    ndarray, shape (4, 2 len(x))
+        ``band[3 + i - j, j] = K[i, j]`` for ``i <= j``, degrees of freedom (w, theta) per
+        node (`scipy.linalg.solveh_banded`).
+    """
+    L = np.diff(np.asarray(x, dtype=float))
+    e, ke = 2 * np.arange(L.size), element_stiffness(L, EI)
+    band = np.zeros((4, 2 * L.size + 2))
+    for i, j in zip(*np.triu_indices(4), strict=True):
+        band[3 + i - j, e + j] += ke[:, i, j]
+    return band
 
 
 @dataclass(frozen=True)
@@ -198,7 +259,7 @@ class BeamSolution:
         e = np.clip(np.searchsorted(nodes, xq, side="right") - 1, 0, nodes.size - 2)
         L, t = nodes[e + 1] - nodes[e], xq - nodes[e]
         dofs = (self.deflection[e], self.rotation[e], self.deflection[e + 1], self.rotation[e + 1])
-        w = sum(n * v for n, v in zip(_hermite(t / L, L), dofs, strict=True))
+        w = sum(n * v for n, v in zip(hermite(t / L, L), dofs, strict=True))
         le = np.clip(
             np.searchsorted(nodes, self.load_position, side="right") - 1, 0, nodes.size - 2
         )
@@ -315,16 +376,12 @@ def solve_beam(
         raise TrackdynInputError("load: at least one wheel load is needed")
 
     x = _mesh(sx, xp, float(max_element))
-    L, e, ndof = np.diff(x), 2 * np.arange(x.size - 1), 2 * x.size
-    band = np.zeros((4, ndof))  # LAPACK upper band: band[3 + i - j, j] = K[i, j], i <= j
-    ke = np.array([[12, 6, -12, 6], [6, 4, -6, 2], [-12, -6, 12, -6], [6, 2, -6, 4]])
-    power = np.array([0, 1, 0, 1]) - 1.5  # K[i, j] = EI ke[i, j] L^(power[i] + power[j])
-    for i, j in zip(*np.triu_indices(4), strict=True):
-        band[3 + i - j, e + j] += EI * ke[i, j] * L ** (power[i] + power[j])
+    L, ndof = np.diff(x), 2 * x.size
+    band = stiffness_band(x, EI)
     abs_band = np.abs(band)
     el = np.clip(np.searchsorted(x, xp, side="right") - 1, 0, x.size - 2)
     f_total = np.zeros(ndof)
-    for i, n in enumerate(_hermite((xp - x[el]) / L[el], L[el])):
+    for i, n in enumerate(hermite((xp - x[el]) / L[el], L[el])):
         np.add.at(f_total, 2 * el + i, p * n)
     w = 2 * np.searchsorted(x, sx)
     gap = supports.deflection[:, 0]

@@ -1,0 +1,249 @@
+"""Ballast level under each rail seat, the gaps it opens, and what the rail does about it.
+
+Settlement lowers the ballast under a rail seat; the sleeper stays on the rail until the
+rail comes down onto the ballast, so a sleeper whose ballast sinks faster than its
+neighbours' hangs. The rail of each side is a `trackdyn.deterioration.railseat.RailBeam`:
+one linear, tensionless spring per sleeper with the stiffness equivalent to the measured
+``k2`` (eq 5.7 times the spacing, `LinearisedTrack.support_stiffness`) behind a gap. The
+gap at the start is the sleeper's seating gap in excess of the median of its neighbours
+(±`VOID_NEIGHBOURS` sleepers): a void under that sleeper alone; the common part is
+seating of the whole track and stays in the measured linearisation. A freshly tamped
+start (``seated``) closes these voids. Settlement ``b`` [m] adds to the gap.
+
+From the beam, each step re-derives (all changes from the start state, so that the
+first step runs on the track as it starts):
+
+- the unloaded profile: measured profile plus the change of the rail's self-weight
+  deflection, interpolated linearly between sleepers;
+- the linearisation of eqs 5.9-5.11 at each sleeper: ``k2`` scaled by the beam's secant
+  stiffness under ``Ps (1 ± δ)`` over its value at the start, ``ys`` plus the change of
+  the beam's mean deflection under those loads.
+
+The rate field: a lognormal factor per sleeper on every settlement increment, ``exp(σ z -
+σ²/2)`` with ``σ² = ln(1 + cov²)`` and ``z`` a unit Gaussian field with correlation length
+``ℓ`` (`trackdyn.track.synthetic.correlated_field`), the two rails' fields correlated by
+`RAIL_CORRELATION`.
+
+References
+----------
+Shenton, M.J. (1985). Ballast deformation and track deterioration. In: Track
+Technology, Thomas Telford, London, 253-265.
+
+Sato, Y. (1995). Japanese studies on deterioration of ballasted track. Vehicle System
+Dynamics 24 (suppl.), 197-208.
+
+Nielsen, J.C.O., Li, X. (2018). Railway track geometry degradation due to differential
+settlement of ballast/subgrade - Numerical prediction by an iterative procedure. Journal
+of Sound and Vibration 412, 441-456.
+
+Zhai, W.M., Wang, K.Y., Lin, J.H. (2004). Modelling and experiment of railway ballast
+vibrations. Journal of Sound and Vibration 270, 673-683.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from scipy.ndimage import median_filter
+
+from trackdyn.deterioration.railseat import RailBeam, RailRest, Windows, rest_state
+from trackdyn.errors import TrackdynInputError
+from trackdyn.track.synthetic import correlated_field
+from trackdyn.track.track import RAILS, Geometry, LinearisedTrack
+from trackdyn.units import GRAVITY
+
+VOID_NEIGHBOURS = 5
+"""Sleepers each side whose median seating gap counts as seating of the whole track."""
+
+RAIL_CORRELATION = 0.7
+"""Correlation of the left and right rails' rate fields [-]; illustrative, the value
+`trackdyn.track.synthetic.synthetic_track` uses for its stiffness fields."""
+
+
+def rate_field(n: int, spacing: float, cov: float, correlation_length: float, seed):
+    """Lognormal settlement-rate factor per rail and sleeper, mean 1, shape (2, n) [-].
+
+    Parameters
+    ----------
+    n : int
+        Sleepers.
+    spacing : float
+        Sleeper spacing [m].
+    cov : float
+        Coefficient of variation of the factor, >= 0 [-].
+    correlation_length : float
+        Correlation length of the underlying Gaussian field, > 0 [m].
+    seed : int or tuple of int
+        Seed of the field.
+    """
+    if not 0 <= cov < np.inf:
+        raise TrackdynInputError(f"rate_cov must be >= 0, got {cov!r}")
+    if not 0 < correlation_length < np.inf:
+        raise TrackdynInputError(f"rate_correlation_length must be > 0, got {correlation_length!r}")
+    rng = np.random.default_rng(seed)
+    common = correlated_field(n, spacing, correlation_length, rng)
+    c = RAIL_CORRELATION
+    z = [c * common + np.sqrt(1 - c * c) * correlated_field(n, spacing, correlation_length, rng)
+         for _ in RAILS]  # fmt: skip
+    sigma = np.sqrt(np.log1p(cov**2))
+    return np.exp(sigma * np.array(z) - sigma**2 / 2)
+
+
+def excess_gap(seating_gap: np.ndarray) -> np.ndarray:
+    """Seating gap in excess of the median of the neighbours, per rail and sleeper [m]."""
+    size = (1, 2 * VOID_NEIGHBOURS + 1)
+    return np.maximum(seating_gap - median_filter(seating_gap, size=size, mode="nearest"), 0.0)
+
+
+@dataclasses.dataclass(frozen=True)
+class BallastState:
+    """Both rails at rest on one set of ballast levels.
+
+    Parameters
+    ----------
+    rails : tuple of RailRest
+        Each rail's rest state (gap, deflection, support force, bearing sleepers).
+    """
+
+    rails: tuple[RailRest, ...]
+
+    def _stack(self, name):
+        return np.array([getattr(r, name) for r in self.rails])
+
+    @property
+    def gap(self) -> np.ndarray:
+        """Gap between sleeper and ballast at zero rail deflection, (2, n) [m]."""
+        return self._stack("gap")
+
+    @property
+    def deflection(self) -> np.ndarray:
+        """Rail deflection under self-weight, (2, n) [m]."""
+        return self._stack("deflection")
+
+    @property
+    def force(self) -> np.ndarray:
+        """Support forces under self-weight, (2, n) [N]."""
+        return self._stack("force")
+
+    @property
+    def hanging_gap(self) -> np.ndarray:
+        """Gap under each sleeper with the rail at rest, (2, n) [m] (0: it bears)."""
+        return np.maximum(self.gap - self.deflection, 0.0)
+
+
+class Ballast:
+    """Both rails of a section on their sleepers and ballast.
+
+    Parameters
+    ----------
+    lin : LinearisedTrack
+        The measured track linearised about the heaviest static wheel load of the traffic
+        (sets the support stiffness and the initial voids).
+    rail : RailSection
+        Rail section (EI and mass per metre).
+    sleeper_mass : float
+        Sleeper mass per rail seat [kg].
+    half : int
+        Sleepers each side of a wheel in the beam windows [-].
+    seated : bool
+        Start with every sleeper seated on its ballast (freshly tamped): the initial voids
+        are closed, in the beam and in the linearisation (``ys`` less the void); the
+        support curves keep their stiffness. Otherwise the voids are as measured.
+    """
+
+    def __init__(self, lin: LinearisedTrack, rail, sleeper_mass: float, half: int = 10,
+                 seated: bool = False):  # fmt: skip
+        pos = lin.track.supports.position
+        if pos.size < 2:
+            raise TrackdynInputError("the ballast model needs at least two sleepers")
+        spacing = np.gradient(pos)
+        weight = (rail.mass * spacing + sleeper_mass) * GRAVITY
+        kd = lin.support_stiffness(rail.EI)
+        self.position, self.delta = pos, lin.delta
+        self.beams = [RailBeam(pos, kd[r], weight, rail.EI, half) for r in range(len(RAILS))]
+        self.windows = [Windows(b) for b in self.beams]
+        void = excess_gap(lin.seating_gap())
+        self.reseat = void if seated else np.zeros_like(void)  # closed by tamping [m]
+        self.void = void - self.reseat
+        self.initial = self.state(np.zeros_like(self.void))
+        self._secant0 = {}
+
+    def state(self, level, previous: BallastState | None = None) -> BallastState:
+        """Both rails at rest with ballast settlement ``level`` (2, n) [m].
+
+        Parameters
+        ----------
+        level : ndarray
+            Settlement of the ballast under each rail seat, (2, n) [m].
+        previous : BallastState, optional
+            A state near this one (the previous step's), to start the solve from.
+        """
+        gap = self.void + level
+        start = [None] * len(self.beams) if previous is None else [r.closed for r in previous.rails]
+        rails = zip(self.beams, gap, start, strict=True)
+        return BallastState(tuple(rest_state(b, g, c) for b, g, c in rails))
+
+    def geometry(self, measured: Geometry, state: BallastState) -> Geometry:
+        """Unloaded space curve: measured plus the change of the rails' rest deflection."""
+        g = measured
+        change = state.deflection - self.initial.deflection
+        left, right = (np.interp(g.distance, self.position, c) for c in change)
+        return Geometry(g.distance, g.left + left, g.right + right, g.where)
+
+    def wheel_solve(self, r: int, state: BallastState, centre, position, load):
+        """Rail-seat forces of rail ``r`` with wheel loads on the rest state.
+
+        Parameters
+        ----------
+        r : int
+            Rail index.
+        state : BallastState
+            Current rest state.
+        centre : ndarray, shape (B,)
+            Sleeper under the wheel of each row.
+        position, load : ndarray, shape (B, L)
+            Wheel positions [m] and loads [N] of each row.
+
+        Returns
+        -------
+        index, force, deflection : ndarray, shape (B, W)
+            Sleeper of each column (``-1`` .. ``n``: beyond the section), total support force
+            [N] and rail deflection [m]; see `Windows.solve`.
+        """
+        w = self.windows[r]
+        return w.solve(state.rails[r], centre, w.load_vector(centre, position, load))
+
+    def _secant(self, state: BallastState, static_load: float):
+        """Beam secant stiffness [N/m] and mean deflection [m] under ``Ps (1 ± δ)``."""
+        n = self.position.size
+        centre = np.tile(np.arange(n), 2)
+        load = static_load * np.repeat([1 - self.delta, 1 + self.delta], n)[:, None]
+        k, ys = [], []
+        for r in range(len(RAILS)):
+            _, _, y = self.wheel_solve(r, state, centre, self.position[centre][:, None], load)
+            dy = y[:, self.beams[r].half] - np.tile(state.rails[r].deflection, 2)
+            k.append(2 * self.delta * static_load / (dy[n:] - dy[:n]))
+            ys.append(0.5 * (dy[n:] + dy[:n]))
+        return np.array(k), np.array(ys)
+
+    def linearised(self, lin0: LinearisedTrack, state: BallastState, geometry) -> LinearisedTrack:
+        """``lin0`` (the measured linearisation) updated for the current ballast.
+
+        Parameters
+        ----------
+        lin0 : LinearisedTrack
+            Measured track linearised about one static wheel load.
+        state : BallastState
+            Current rest state.
+        geometry : Geometry
+            Current unloaded space curve.
+        """
+        key = lin0.static_load
+        if key not in self._secant0:
+            self._secant0[key] = self._secant(self.initial, key)
+        k0, ys0 = self._secant0[key]
+        k, ys = self._secant(state, key)
+        track = dataclasses.replace(lin0.track, geometry=geometry)
+        ys = lin0.ys - self.reseat + ys - ys0
+        return dataclasses.replace(lin0, track=track, k2=lin0.k2 * k / k0, ys=ys)

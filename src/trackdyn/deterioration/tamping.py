@@ -1,0 +1,76 @@
+"""A freshly tamped start: most of the D1 band taken out, the longer waves kept.
+
+Tamping lifts and levels the track over the short and middle wavelengths; the long waves
+of the formation (EN 13848-1 bands D2, 25-70 m, and D3, 70-150 m) are mostly left. The
+tamped profile of each rail is the measured one minus a fraction ``a`` of its D1-band
+(3-25 m) longitudinal level, ``a`` chosen so that the root mean square over the segments
+of the D1 standard deviation is `TAMPED_D1_SD` (``a = 0`` if the measured track is
+already better; ``a = 1`` at most). Tamping also re-seats the sleepers: the ballast under
+every sleeper is brought up to the rail, so no sleeper hangs at the start
+(`trackdyn.deterioration.ballast.Ballast`, ``seated=True``).
+
+References
+----------
+EN 13848-1:2019. Railway applications - Track - Track geometry quality - Part 1:
+Characterisation of track geometry. CEN, Brussels.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from scipy.optimize import brentq
+
+from trackdyn.deterioration.results import d1_sd
+from trackdyn.track.quality import longitudinal_level
+from trackdyn.track.track import RAILS, Geometry
+
+TAMPED_D1_SD = 1.2e-3
+"""D1 standard deviation after tamping, root mean square over the segments [m];
+illustrative: the middle of the 1-1.5 mm the example is meant to start from."""
+
+STARTS = ("tamped", "as measured")
+"""Start states of a deterioration run."""
+
+
+def tamped_geometry(geometry: Geometry, extent, segment_length: float,
+                    target: float = TAMPED_D1_SD) -> Geometry:  # fmt: skip
+    """The unloaded space curve right after tamping.
+
+    Parameters
+    ----------
+    geometry : Geometry
+        Measured unloaded space curve.
+    extent : tuple of float
+        Part of the track assessed (where geometry and supports overlap) [m].
+    segment_length : float
+        Segment length of the D1 standard deviation [m].
+    target : float
+        Root mean square over the segments of the D1 standard deviation after tamping,
+        per rail [m].
+
+    Returns
+    -------
+    Geometry
+        Profiles with a fraction of the D1 band removed, per rail.
+    """
+    x = geometry.distance
+    profiles = {}
+    for r, rail in enumerate(RAILS):
+        z = geometry.profile(rail)
+        d1 = longitudinal_level(x, z, "D1")
+
+        def excess(a, z=z, d1=d1, r=r, rail=rail):
+            g = dataclasses.replace(geometry, **{rail: z - a * d1})
+            sd = d1_sd(g, extent, segment_length)[0][r]
+            return float(np.sqrt(np.mean(sd**2))) - target * 1e3
+
+        if excess(0.0) <= 0:
+            a = 0.0
+        elif excess(1.0) >= 0:
+            a = 1.0
+        else:
+            a = brentq(excess, 0.0, 1.0, xtol=1e-6)
+        profiles[rail] = z - a * d1
+    return dataclasses.replace(geometry, **profiles)

@@ -1,0 +1,84 @@
+"""Rail-seat forces from the rail beam, against independent solves of `solve_beam`."""
+
+import numpy as np
+import pytest
+
+from trackdyn.deterioration.ballast import Ballast
+from trackdyn.deterioration.railseat import rest_state
+from trackdyn.track.beam import linear_supports, solve_beam
+from trackdyn.track.rails import rail_section
+from trackdyn.track.synthetic import VoidedSleepers, synthetic_track
+
+RAIL = rail_section("60E1")
+SLEEPER_MASS = 125.5  # kg per rail seat, Zhai et al. (2004), as the loop's default
+WHEELS = np.array([0.0, 1.83])  # a bogie's two wheels [m], Barber bogie wheelbase
+LOADS = np.array([120e3, 110e3])  # wheel loads [N], about a 104 t wagon's static load
+
+
+def ballast(void=None):
+    """60 m of level track, linear supports of 100 kN/mm per wheel, optionally one void."""
+    features = () if void is None else (VoidedSleepers(30.0, 1, void, "both"),)
+    trk = synthetic_track(60.0, spectrum=None, stiffness_cov=0.0, gap=0.0, seed=1,
+                          features=features)  # fmt: skip
+    return Ballast(trk.linearise(120e3, 0.3), RAIL, SLEEPER_MASS)
+
+
+def independent(b, state, r, at, loads):
+    """Support forces of the whole section by `solve_beam`: self-weight and wheels."""
+    beam, gap = b.beams[r], state.rails[r].gap
+    base = gap.min()  # solve_beam starts from zero deflection: drop the rail onto the ballast
+    supports = linear_supports(beam.position, beam.stiffness, gap - base)
+    sol = solve_beam(supports, beam.EI, np.r_[beam.position, at], np.r_[beam.weight, loads],
+                     max_element=1e3, max_iter=400)  # fmt: skip
+    return sol.support_force
+
+
+def wheel_forces(b, state, r, i):
+    """Rail-seat forces with the bogie's first wheel over sleeper ``i``: index, force."""
+    at = b.position[i] + WHEELS
+    index, force, _ = b.wheel_solve(r, state, np.array([i]), at[None, :], LOADS[None, :])
+    return index[0], force[0]
+
+
+def test_rest_state_matches_an_independent_fe_solve():
+    b = ballast()
+    gap = np.random.default_rng(5).uniform(0.0, 1.5e-3, b.position.size)  # rough ballast
+    rest = rest_state(b.beams[0], gap)
+    beam = b.beams[0]
+    sol = solve_beam(linear_supports(beam.position, beam.stiffness, gap - gap.min()), beam.EI,
+                     beam.position, beam.weight, max_element=1e3, max_iter=400)  # fmt: skip
+    np.testing.assert_allclose(rest.force, sol.support_force, atol=1e-3)  # N
+    assert rest.force.sum() == pytest.approx(beam.weight.sum(), rel=1e-12)  # equilibrium
+    assert 0 < np.count_nonzero(rest.closed) < gap.size  # some sleepers hang
+
+
+@pytest.mark.parametrize("void", [0.0, 1.0e-3])
+def test_wheel_forces_match_an_independent_fe_solve_and_sum_to_the_loads(void):
+    """Windows of ±10 sleepers against the whole section; within 5 sleepers of the wheels
+    the window's held ends change the forces by < 50 N (of 40-60 kN). The forces of the
+    window sum to the wheel loads plus the self-weight carried there (rail over a sleeper
+    spacing plus the sleeper, per sleeper) to within the held ends' share, < 0.5 %."""
+    b = ballast(None if void == 0.0 else void)
+    state = b.initial
+    i = int(np.argmin(np.abs(b.position - 30.0))) - 1  # the wheel over the void's neighbour
+    index, force = wheel_forces(b, state, 0, i)
+    full = independent(b, state, 0, b.position[i] + WHEELS, LOADS)
+    near = np.abs(index - i) <= 5
+    np.testing.assert_allclose(force[near], full[index[near]], atol=50.0)
+    total = LOADS.sum() + b.beams[0].weight[index].sum()
+    assert force.sum() == pytest.approx(total, rel=5e-3)
+
+
+def test_a_hanging_sleepers_load_goes_to_its_neighbours():
+    """A 1 mm void under one sleeper (rail at rest leaves it hanging): with the wheel over
+    either neighbour that neighbour carries more than on level ballast, by > 10 %, and the
+    voided sleeper less (independent FE solves agree, see the test above)."""
+    level, voided = ballast(), ballast(1.0e-3)
+    v = int(np.argmin(np.abs(voided.position - 30.0)))
+    assert voided.initial.hanging_gap[0, v] > 0.5e-3  # it hangs at rest
+    for i in (v - 1, v + 1):
+        index, f_void = wheel_forces(voided, voided.initial, 0, i)
+        _, f_level = wheel_forces(level, level.initial, 0, i)
+        at = index == i
+        assert f_void[at][0] > 1.1 * f_level[at][0]
+        assert f_void[index == v][0] < 0.8 * f_level[index == v][0]
