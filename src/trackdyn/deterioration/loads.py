@@ -18,7 +18,7 @@ import time
 import numpy as np
 
 from trackdyn.errors import TrackdynInputError
-from trackdyn.simulation import simulate, time_step
+from trackdyn.simulation import simulate_batch, time_step
 from trackdyn.track.track import RAILS, LinearisedTrack
 from trackdyn.vehicle.models import build_model
 
@@ -125,15 +125,39 @@ class TrafficRun:
         every = max(1, int(options.output_spacing / (traffic.speed * dt)))
         self.run = options.run.with_(speed_kmh=traffic.speed * 3.6, dt_s=dt, store_every=every)
 
-    def loads(self, lin: LinearisedTrack, ballast, state, timing: dict) -> np.ndarray:
-        """Load cycles of one passage over ``lin`` on ``state``, (wheels, sleepers) [N].
 
-        Adds the seconds spent to ``timing["vehicle"]`` and ``timing["beam"]``.
-        """
-        clock = time.perf_counter()
-        ds = simulate(self.traffic.vehicle, lin, self.run)
-        timing["vehicle"] += time.perf_counter() - clock
-        clock = time.perf_counter()
-        loads = passage_loads(ds, ballast, state, self.model)
-        timing["beam"] += time.perf_counter() - clock
-        return loads
+def passages(runs, lins: list[LinearisedTrack], ballast, state, timing: dict) -> list:
+    """Load cycles of one passage of each vehicle, (wheels, sleepers) [N] per run.
+
+    The vehicles run side by side in one batch (`trackdyn.simulation.simulate_batch`), each
+    over its own linearisation of the track as it stands; their wheel loads then go onto
+    the rail beam on ``state`` (`passage_loads`). Adds the seconds spent to
+    ``timing["vehicle"]`` and ``timing["beam"]``.
+
+    Parameters
+    ----------
+    runs : list of TrafficRun
+        The traffic.
+    lins : list of LinearisedTrack
+        The current track linearised about each run's static wheel load.
+    ballast : Ballast
+        The ballast model of the section.
+    state : BallastState
+        Its current state (gaps, rest deflection).
+    timing : dict
+        Seconds spent so far, by part.
+    """
+    if not runs:
+        return []
+    clock = time.perf_counter()
+    vehicles = [run.traffic.vehicle for run in runs]
+    datasets = simulate_batch(vehicles, list(lins), [run.run for run in runs])
+    timing["vehicle"] += time.perf_counter() - clock
+    clock = time.perf_counter()
+    loads = []
+    for run, ds in zip(runs, datasets, strict=True):
+        if isinstance(ds, Exception):
+            raise ds
+        loads.append(passage_loads(ds, ballast, state, run.model))
+    timing["beam"] += time.perf_counter() - clock
+    return loads

@@ -39,7 +39,7 @@ from scipy.optimize import brentq
 
 from trackdyn.deterioration.accumulation import memory
 from trackdyn.deterioration.ballast import Ballast, rate_field
-from trackdyn.deterioration.loads import TrafficRun
+from trackdyn.deterioration.loads import TrafficRun, passages
 from trackdyn.deterioration.results import d1_sd, make_dataset
 from trackdyn.deterioration.tamping import STARTS, tamped_geometry
 from trackdyn.errors import TrackdynInputError, require_positive
@@ -226,9 +226,10 @@ def predict(track: Track, traffic, law, options=None, *, progress=False):
             current = {p: ballast.linearised(lin, state, geometry) for p, lin in lins.items()}
             timing["beam"] += time.perf_counter() - clock
             cycles, peak = [], np.zeros(shape)
-            for run in runs:
-                lin = current[run.lin.static_load]
-                loads = run.loads(lin, ballast, state, timing)
+            step_lins = [current[run.lin.static_load] for run in runs]
+            for run, lin, loads in zip(
+                runs, step_lins, passages(runs, step_lins, ballast, state, timing), strict=True
+            ):
                 for q, r, w in zip(loads, run.rails, run.weights, strict=True):
                     cycles.append((r, w, q, lin.k2[r]))
                     peak[r] = np.maximum(peak[r], q)
