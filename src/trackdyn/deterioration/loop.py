@@ -118,6 +118,9 @@ class LoopOptions:
     start : str
         ``"as measured"``: the track as its files give it; ``"tamped"``: freshly tamped
         (`trackdyn.deterioration.tamping`: most of the D1 band removed, sleepers seated).
+    snapshot_mgt : tuple of float
+        Further tonnages at which to store a geometry snapshot, e.g. those of surveys
+        [MGT]; those beyond ``total_mgt`` are ignored.
     """
 
     total_mgt: float = 50.0
@@ -134,6 +137,7 @@ class LoopOptions:
     rail: str = "60E1"
     output_spacing: float = 0.02
     start: str = "as measured"
+    snapshot_mgt: tuple[float, ...] = ()
 
 
 NO_TRAFFIC_LOAD = 100e3
@@ -210,7 +214,8 @@ def predict(track: Track, traffic, law, options=None, *, progress=False):
     state = ballast.initial
     timing["beam"] += time.perf_counter() - clock
     acc = memory(law, shape)
-    snap_at = np.append(np.arange(0.0, total, every), total)
+    extra = [float(m) for m in o.snapshot_mgt if 0.0 < m < total]
+    snap_at = np.unique(np.concatenate([np.arange(0.0, total, every), extra, [total]]))
     level, mgt, geometry = np.zeros(shape), 0.0, track.geometry
     history = {"mgt": [0.0], "settlement": [level], "geometry": [geometry],
                "hanging_gap": [state.hanging_gap]}  # fmt: skip
