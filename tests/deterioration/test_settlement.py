@@ -88,8 +88,11 @@ def test_shipped_file_gives_value_unit_source_and_is_labelled_illustrative():
     for name, table in data.items():
         for key, entry in table.items():
             if key != "description":
-                assert {"value", "unit", "source"} <= set(entry) <= {"value", "unit",
-                                                                     "source", "min", "max"}
+                assert (
+                    {"value", "unit", "source"}
+                    <= set(entry)
+                    <= {"value", "unit", "source", "min", "max"}
+                )
                 assert "illustrative" in entry["source"], (name, key)
     law = load_law("power")
     # settlement.toml: K_s = 0.5 mm, Q_ref = 50 kN, k_ref = 100 kN/mm, converted to SI
