@@ -330,8 +330,9 @@ def calibrate(
     Writes settlement_fitted.toml (for deteriorate's [settlement] file), calibration.csv
     (misfit and D1 SD per survey, rail and segment) and calibration.png.
     """
-    from trackdyn.deterioration.calibrate import load_calibration, prepare
+    from trackdyn.deterioration.calibrate import prepare
     from trackdyn.deterioration.calibration_outputs import sd_errors, write_calibration
+    from trackdyn.deterioration.calibration_spec import load_calibration
     from trackdyn.deterioration.fitting import fit
     from trackdyn.deterioration.settlement import law_units
 

@@ -13,8 +13,9 @@ import pytest
 from typer.testing import CliRunner
 
 from trackdyn.cli import app
-from trackdyn.deterioration import LoopOptions, Traffic, load_law, predict
-from trackdyn.deterioration.calibrate import load_calibration, prepare
+from trackdyn.deterioration import LoopOptions, Traffic, load_law
+from trackdyn.deterioration.calibrate import prepare, synthetic_surveys
+from trackdyn.deterioration.calibration_spec import load_calibration
 from trackdyn.deterioration.fitting import Objective
 from trackdyn.deterioration.surveys import align, surveyed_geometry
 from trackdyn.io import write_geometry, write_supports
@@ -70,18 +71,13 @@ def folder(tmp_path_factory):
     spot = SoftSpot(centre=100.0, length=8.0, factor=0.45, gap=1.5e-3)
     trk = synthetic_track(200.0, spectrum="fra5", seed=3, features=(spot,))
     traffic = [Traffic(load_vehicle(v), SPEED / 3.6, 8065.0, v) for v in ("loaded", "empty")]
-    options = LoopOptions(run=RunOptions(model="7dof"), rate_cov=0.0, total_mgt=MGT[-1],
-                          snapshot_every_mgt=MGT[-1], snapshot_mgt=MGT[1:-1],
-                          segment_length=100.0, max_step_settlement=2e-3,
-                          start="as surveyed")  # fmt: skip
-    ds = predict(trk, traffic, load_law("power", **TRUE), options)
-    rng = np.random.default_rng(7)
-    x = trk.geometry.distance
+    options = LoopOptions(run=RunOptions(model="7dof"), rate_cov=0.0, segment_length=100.0,
+                          max_step_settlement=2e-3, start="as surveyed")  # fmt: skip
+    surveys = synthetic_surveys(trk, traffic, load_law("power", **TRUE), options, MGT,
+                                noise=NOISE, offset=OFFSET, seed=7)  # fmt: skip
     write_supports(trk.supports, path / "supports.csv")
-    for k in range(len(MGT)):
-        z = ds.profile.isel(snapshot=k).values + rng.normal(0.0, NOISE, (2, x.size))
-        shift = 0.0 if k == 0 else OFFSET
-        write_geometry(Geometry(x - shift, z[0], z[1]), path / f"survey_{k + 1}.csv")
+    for k, survey in enumerate(surveys):
+        write_geometry(survey, path / f"survey_{k + 1}.csv")
     other = synthetic_track(200.0, spectrum="fra5", seed=4)  # another section
     write_geometry(other.geometry, path / "other.csv")
     survey = pd.read_csv(path / "survey_2.csv")

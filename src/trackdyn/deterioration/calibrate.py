@@ -1,38 +1,11 @@
 """Fit settlement-law parameters to repeated geometry surveys (`trackdyn calibrate`).
 
-A calibration file is a deterioration scenario (`trackdyn.deterioration.scenario`:
-``[run]``, ``[[traffic]]``, ``[settlement]``, ``[loop]``) whose geometry comes from the
-surveys, plus ``[[survey]]`` entries and a ``[fit]`` table:
-
-```toml
-[track]
-supports = "supports.csv"       # support curves, on the first survey's distances
-rail = "60E1"
-
-[[survey]]                      # two or more, in order of increasing tonnage
-geometry = "survey_1.csv"       # distance_m,left_mm,right_mm
-mgt = 0                         # traffic since the last tamping (or any common origin)
-[[survey]]
-geometry = "survey_2.csv"
-mgt = 10
-[[survey]]
-geometry = "survey_3.csv"
-mgt = 20
-check = true                    # not fitted: predicted with the fitted and starting values
-
-[fit]
-parameters = ["K_s", "load_exponent"]  # of the [settlement] law; each needs min and max
-min_correlation = 0.7           # refuse a survey whose D1 profile matches the first less
-max_shift_m = 20                # largest distance offset searched
-loss_scale_mm = 0.2             # residual size where the soft-L1 loss turns linear
-ignore_m = [[700, 740]]         # distance ranges left out (bridges, switches)
-max_iterations = 30             # evaluations of the misfit
-```
-
-Each later survey is aligned to the first (`trackdyn.deterioration.surveys`). The model
-runs from the first survey as measured over the tonnage to each later one (its cycle count
-starts there: only tonnage differences enter); the residuals are the predicted minus the
-measured D1-band change per rail, every `RESIDUAL_SPACING` (about independent samples of
+The calibration file is read by `trackdyn.deterioration.calibration_spec`. Each later
+survey is aligned to the first (`trackdyn.deterioration.surveys`). The model runs from the
+first survey (``[track] start``, default as surveyed: wavelengths under 3 m removed) over
+the tonnage to each later one (its cycle count starts there: only tonnage differences
+enter); each survey is aligned again to the profile predicted for it; the residuals are
+the predicted minus the measured D1-band change per rail, every `RESIDUAL_SPACING` (about independent samples of
 the band), leaving out `EDGE` at both ends and the ignored ranges. They are minimised by
 `scipy.optimize.least_squares` (trust-region reflective, soft-L1 loss), in log space for
 parameters whose bounds are positive and as they are otherwise, within the ``min`` and
@@ -57,12 +30,11 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal
 
 import numpy as np
-from pydantic import Field, NonNegativeFloat, PositiveFloat, PositiveInt, model_validator
 
-from trackdyn.deterioration.scenario import DeteriorationScenario, loop_options, resolve_inputs
+from trackdyn.deterioration.calibration_spec import CalibrationScenario
+from trackdyn.deterioration.scenario import loop_options, resolve_inputs
 from trackdyn.deterioration.sections import Section, SectionTask, run_sections
 from trackdyn.deterioration.settlement import law_bounds, law_units
 from trackdyn.deterioration.surveys import (
@@ -74,8 +46,7 @@ from trackdyn.deterioration.surveys import (
     read_survey,
 )
 from trackdyn.errors import TrackdynInputError
-from trackdyn.io import read_supports, read_toml
-from trackdyn.options import Strict, parse
+from trackdyn.io import read_supports
 from trackdyn.track.quality import WAVEBANDS
 from trackdyn.track.track import Geometry, Track
 
@@ -87,81 +58,6 @@ EDGE = WAVEBANDS["D1"][1] / 2
 
 FD_STEP = 0.05
 """Forward-difference step of the Jacobian in fit coordinates (log or as is) [-]."""
-
-
-class SurveySpec(Strict):
-    """``[[survey]]``: ``geometry`` CSV, its tonnage ``mgt`` [MGT], and ``check`` (not
-    fitted, only predicted)."""
-
-    geometry: Path
-    mgt: NonNegativeFloat
-    check: bool = False
-
-
-class FitSpec(Strict):
-    """``[fit]``: ``parameters`` to fit, ``min_correlation`` [-], ``max_shift_m`` [m],
-    ``loss_scale_mm`` [mm], ``ignore_m`` ranges [m], ``max_iterations``."""
-
-    parameters: list[str] = Field(min_length=1)
-    min_correlation: float = Field(0.7, gt=0, le=1)
-    max_shift_m: PositiveFloat = 20.0
-    loss_scale_mm: PositiveFloat = 0.2
-    ignore_m: list[tuple[float, float]] = Field(default_factory=list)
-    max_iterations: PositiveInt = 30
-
-    @model_validator(mode="after")
-    def _check(self):
-        if len(set(self.parameters)) < len(self.parameters):
-            raise ValueError("parameters: a parameter is named twice")
-        for lo, hi in self.ignore_m:
-            if not lo < hi:
-                raise ValueError(f"ignore_m: range [{lo:g}, {hi:g}] does not have start < end")
-        return self
-
-
-class CalibrationTrackSpec(Strict):
-    """``[track]`` of a calibration: ``supports`` CSV, ``rail`` section; the geometry is
-    the first survey, ``start`` ``"as surveyed"`` (wavelengths under 3 m removed) or
-    ``"as measured"``."""
-
-    supports: Path
-    rail: str = "60E1"
-    start: Literal["as surveyed", "as measured"] = "as surveyed"
-
-
-class CalibrationScenario(DeteriorationScenario):
-    """A deterioration scenario with surveys and what to fit."""
-
-    track: CalibrationTrackSpec
-    survey: list[SurveySpec] = Field(min_length=2)
-    fit: FitSpec
-
-    @model_validator(mode="after")
-    def _surveys(self):
-        if self.survey[0].check or sum(not s.check for s in self.survey) < 2:
-            raise ValueError("survey: the first survey and at least one more must be fitted")
-        for i in range(1, len(self.survey)):
-            if self.survey[i].mgt <= self.survey[i - 1].mgt:
-                raise ValueError(
-                    f"survey {i + 1} ({self.survey[i].geometry}): mgt {self.survey[i].mgt:g} "
-                    f"is not above the {self.survey[i - 1].mgt:g} of the one before"
-                )
-        given = sorted({"total_mgt", "snapshot_every_mgt"} & self.loop.model_fields_set)
-        if given:
-            raise ValueError(f"loop.{given[0]}: set by the survey tonnages, leave it out")
-        return self
-
-
-def load_calibration(path) -> tuple[CalibrationScenario, Path]:
-    """The calibration in ``path`` and the folder its relative paths start from.
-
-    Parameters
-    ----------
-    path : path
-        Calibration TOML file.
-    """
-    path = Path(path)
-    return parse(CalibrationScenario, read_toml(path), str(path)), path.resolve().parent
 
 
 @dataclass(frozen=True)
@@ -413,3 +309,47 @@ def residuals(problem: Problem, comparison: Comparison) -> np.ndarray:
     """
     diff = (comparison.predicted - comparison.measured)[problem.fitted][:, :, problem.use]
     return diff.ravel() * 1e3
+
+
+def synthetic_surveys(track, traffic, law, options, mgt, *, noise=0.3e-3, offset=2.7, seed=0):
+    """Surveys made by the model itself: for testing a calibration on known parameters.
+
+    The model runs from ``track`` with ``law`` and the profiles at the tonnages ``mgt`` get
+    white measurement noise; every survey but the first is offset in distance.
+
+    Parameters
+    ----------
+    track : Track
+        The true section.
+    traffic : sequence of Traffic
+        The traffic.
+    law : SettlementLaw
+        The true law.
+    options : LoopOptions
+        Loop options; ``total_mgt`` and the snapshots are set from ``mgt``.
+    mgt : sequence of float
+        Survey tonnages, the first 0, increasing [MGT].
+    noise : float
+        Standard deviation of the measurement noise [m].
+    offset : float
+        Distance offset of the later surveys: their distances read ``offset`` less [m].
+    seed : int
+        Seed of the noise.
+
+    Returns
+    -------
+    list of Geometry
+    """
+    from trackdyn.deterioration.loop import predict
+
+    o = dataclasses.replace(options, total_mgt=float(mgt[-1]), snapshot_every_mgt=float(mgt[-1]),
+                            snapshot_mgt=tuple(float(m) for m in mgt[1:]))  # fmt: skip
+    ds = predict(track, traffic, law, o)
+    rng = np.random.default_rng(seed)
+    x = track.geometry.distance
+    surveys = []
+    for k, m in enumerate(mgt):
+        at = int(np.argmin(np.abs(ds.snapshot_mgt.values - m)))
+        z = ds.profile.values[at] + rng.normal(0.0, noise, (2, x.size))
+        surveys.append(Geometry(x - (offset if k else 0.0), z[0], z[1], f"survey at {m:g} MGT"))
+    return surveys
