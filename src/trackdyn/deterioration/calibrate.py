@@ -5,15 +5,16 @@ survey is aligned to the first (`trackdyn.deterioration.surveys`). The model run
 first survey (``[track] start``, default as surveyed: wavelengths under 3 m removed) over
 the tonnage to each later one (its cycle count starts there: only tonnage differences
 enter); each survey is aligned again to the profile predicted for it; the residuals are
-the predicted minus the measured D1-band change per rail, every `RESIDUAL_SPACING` (about independent samples of
-the band), leaving out `EDGE` at both ends and the ignored ranges. They are minimised by
-`scipy.optimize.least_squares` (trust-region reflective, soft-L1 loss), in log space for
-parameters whose bounds are positive and as they are otherwise, within the ``min`` and
-``max`` of the parameter file (`trackdyn.deterioration.settlement.law_bounds`). The
-Jacobian comes from forward differences of `FD_STEP`; a point and its neighbours run as
-one batch through `trackdyn.deterioration.sections.run_sections` (one Dask task per
-parameter set). Standard errors: ``σ² (JᵀJ)⁻¹`` at the solution, σ the robust (MAD)
-scale of the residuals, mapped to the parameters by the delta method.
+the predicted minus the measured D1-band change per rail, every `RESIDUAL_SPACING` (about
+independent samples of the band), leaving out `EDGE` at both ends and the ignored ranges.
+They are minimised by `scipy.optimize.least_squares` (trust-region reflective, soft-L1
+loss), in log space for parameters whose bounds are positive and as they are otherwise,
+within the ``min`` and ``max`` of the parameter file
+(`trackdyn.deterioration.settlement.law_bounds`). The Jacobian comes from forward
+differences of `FD_STEP`; a point and its neighbours run as one batch through
+`trackdyn.deterioration.sections.run_sections` (one Dask task per parameter set). Standard
+errors: ``σ² (JᵀJ)⁻¹`` at the solution, σ the robust (MAD) scale of the residuals, mapped
+to the parameters by the delta method.
 
 The settlement-rate field (``[settlement] rate_cov``) is not fitted: it is random per
 sleeper, so the surveys fix its statistics, not the values the model draws.
