@@ -317,6 +317,7 @@ def deteriorate(
 def calibrate(
     calibration: Annotated[Path, typer.Argument(help="Calibration TOML (surveys, fit).")],
     out: OutOption = Path("trackdyn-out"),
+    overwrite: OverwriteOption = False,
     workers: Annotated[
         int | None,
         typer.Option(help="Worker processes (default: one per core; 1: serial)."),
@@ -347,8 +348,8 @@ def calibrate(
         role = "first" if s is spec.survey[0] else "fit" if used else "check"
         show.add_row(s.geometry.name, f"{s.mgt:g}", role, f"{a.shift:+.3f}", f"{a.correlation:.3f}")
     console.print(show)
-    result = fit(problem, workers=workers, scheduler=scheduler, log=console.print)
-    with staged_output(out) as stage:
+    with output_folder(out, "calibrate", overwrite) as stage:
+        result = fit(problem, workers=workers, scheduler=scheduler, log=console.print)
         table = write_calibration(problem, result, stage, str(calibration))
     units = law_units(spec.settlement.law)
     show = Table(title=f"Fitted {spec.settlement.law} law ({result.runs} model runs)")
