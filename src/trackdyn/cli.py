@@ -310,3 +310,61 @@ def deteriorate(
         )
     console.print(show)
     console.print(f"wrote {len(files)} files (deterioration_*.nc, CSV tables, figures) to {out}")
+
+
+@app.command()
+@refuse_bad_input
+def calibrate(
+    calibration: Annotated[Path, typer.Argument(help="Calibration TOML (surveys, fit).")],
+    out: OutOption = Path("trackdyn-out"),
+    overwrite: OverwriteOption = False,
+    workers: Annotated[
+        int | None,
+        typer.Option(help="Worker processes (default: one per core; 1: serial)."),
+    ] = None,
+    scheduler: Annotated[
+        str | None, typer.Option(help="Address of a running Dask scheduler, tcp://HOST:PORT.")
+    ] = None,
+):
+    """Fit settlement-law parameters to two or more geometry surveys of one section.
+
+    Writes settlement_fitted.toml (for deteriorate's [settlement] file), calibration.csv
+    (misfit and D1 SD per survey, rail and segment) and calibration.png.
+    """
+    from trackdyn.deterioration.calibrate import prepare
+    from trackdyn.deterioration.calibration_outputs import sd_errors, write_calibration
+    from trackdyn.deterioration.calibration_spec import load_calibration
+    from trackdyn.deterioration.fitting import fit
+    from trackdyn.deterioration.settlement import law_units
+
+    if workers is not None and workers < 1:
+        raise TrackdynInputError(f"--workers must be >= 1, got {workers}")
+    spec, base = load_calibration(calibration)
+    problem = prepare(spec, base)
+    show = Table(title="Surveys aligned to the first (D1-band cross-correlation)")
+    for col in ("survey", "MGT", "role", "shift [m]", "correlation"):
+        show.add_column(col)
+    for s, a, used in zip(spec.survey, problem.alignments, problem.fitted, strict=True):
+        role = "first" if s is spec.survey[0] else "fit" if used else "check"
+        show.add_row(s.geometry.name, f"{s.mgt:g}", role, f"{a.shift:+.3f}", f"{a.correlation:.3f}")
+    console.print(show)
+    with output_folder(out, "calibrate", overwrite) as stage:
+        result = fit(problem, workers=workers, scheduler=scheduler, log=console.print)
+        table = write_calibration(problem, result, stage, str(calibration))
+    units = law_units(spec.settlement.law)
+    show = Table(title=f"Fitted {spec.settlement.law} law ({result.runs} model runs)")
+    for col in ("parameter", "start", "fitted", "standard error", "unit (SI)"):
+        show.add_column(col)
+    for name, v0, v, se in zip(problem.names, result.start, result.values,
+                               result.standard_errors, strict=True):  # fmt: skip
+        show.add_row(name, f"{v0:.4g}", f"{v:.4g}", f"{se:.2g}", units[name])
+    console.print(show)
+    console.print(
+        f"RMS misfit of the D1-band change: {result.rms_start:.3f} mm at the start, "
+        f"{result.rms_fit:.3f} mm fitted ({result.message})"
+    )
+    refined = zip(spec.survey[1:], result.comparison.alignments[1:], strict=True)
+    shifts = ", ".join(f"{s.geometry.name} {a.shift:+.3f} m" for s, a in refined)
+    console.print(f"shifts aligned to the fitted prediction: {shifts}")
+    _show(sd_errors(table), "D1 SD per segment, RMS error of the prediction [mm]")
+    console.print(f"wrote settlement_fitted.toml, calibration.csv and calibration.png to {out}")

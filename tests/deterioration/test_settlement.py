@@ -11,6 +11,7 @@ from trackdyn.deterioration.settlement import (
     PowerLaw,
     SatoLaw,
     ShentonLaw,
+    law_bounds,
     load_law,
     time_hardening_increment,
 )
@@ -87,13 +88,37 @@ def test_shipped_file_gives_value_unit_source_and_is_labelled_illustrative():
     for name, table in data.items():
         for key, entry in table.items():
             if key != "description":
-                assert set(entry) == {"value", "unit", "source"}, (name, key)
+                assert (
+                    {"value", "unit", "source"}
+                    <= set(entry)
+                    <= {"value", "unit", "source", "min", "max"}
+                )
                 assert "illustrative" in entry["source"], (name, key)
     law = load_law("power")
     # settlement.toml: K_s = 0.5 mm, Q_ref = 50 kN, k_ref = 100 kN/mm, converted to SI
     assert (law.K_s, law.Q_ref, law.k_ref) == pytest.approx((0.5e-3, 50e3, 100e6))
     assert load_law("power", K_s=1e-3).K_s == 1e-3  # overrides in SI units
     assert isinstance(load_law("sato"), SatoLaw) and isinstance(load_law("shenton"), ShentonLaw)
+    # settlement.toml: K_s between 0.01 and 10 mm, stiffness_exponent between -3 and 1
+    bounds = law_bounds("power")
+    assert bounds["K_s"] == pytest.approx((1e-5, 1e-2))
+    assert bounds["stiffness_exponent"] == (-3.0, 1.0)
+    assert "Q_ref" not in bounds  # a reference scale, not for fitting
+
+
+@pytest.mark.parametrize(
+    ("entry", "message"),
+    [
+        ('{ value = 1, unit = "mm", min = 0.1, source = "x" }', "gives min but not both"),
+        ('{ value = 1, unit = "mm", min = 2, max = 0.1, source = "x" }', "needs min < max"),
+        ('{ value = 1, unit = "mm", min = "a", max = 2, source = "x" }', "K_s min is not a number"),
+    ],
+)
+def test_bad_bounds_are_refused(tmp_path, entry, message):
+    path = tmp_path / "law.toml"
+    path.write_text(f"[power]\nK_s = {entry}\n")
+    with pytest.raises(TrackdynInputError, match=message):
+        law_bounds("power", path)
 
 
 @pytest.mark.parametrize(

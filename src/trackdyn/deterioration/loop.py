@@ -41,6 +41,7 @@ from trackdyn.deterioration.accumulation import memory
 from trackdyn.deterioration.ballast import Ballast, rate_field
 from trackdyn.deterioration.loads import TrafficRun, passages
 from trackdyn.deterioration.results import d1_sd, make_dataset
+from trackdyn.deterioration.surveys import surveyed_geometry
 from trackdyn.deterioration.tamping import STARTS, tamped_geometry
 from trackdyn.errors import TrackdynInputError, require_positive
 from trackdyn.options import RunOptions
@@ -117,7 +118,12 @@ class LoopOptions:
         Travel between stored simulation samples [m] (sets ``store_every``).
     start : str
         ``"as measured"``: the track as its files give it; ``"tamped"``: freshly tamped
-        (`trackdyn.deterioration.tamping`: most of the D1 band removed, sleepers seated).
+        (`trackdyn.deterioration.tamping`: most of the D1 band removed, sleepers seated);
+        ``"as surveyed"``: as measured without the wavelengths under 3 m, mostly
+        measurement noise (`trackdyn.deterioration.surveys.surveyed_geometry`).
+    snapshot_mgt : tuple of float
+        Further tonnages at which to store a geometry snapshot, e.g. those of surveys
+        [MGT]; those beyond ``total_mgt`` are ignored.
     """
 
     total_mgt: float = 50.0
@@ -134,6 +140,7 @@ class LoopOptions:
     rail: str = "60E1"
     output_spacing: float = 0.02
     start: str = "as measured"
+    snapshot_mgt: tuple[float, ...] = ()
 
 
 NO_TRAFFIC_LOAD = 100e3
@@ -194,6 +201,8 @@ def predict(track: Track, traffic, law, options=None, *, progress=False):
     if seated:
         tamped = tamped_geometry(track.geometry, track.extent, o.segment_length)
         track = dataclasses.replace(track, geometry=tamped)
+    elif o.start == "as surveyed":
+        track = dataclasses.replace(track, geometry=surveyed_geometry(track.geometry))
     pos = track.supports.position
     shape = (len(RAILS), pos.size)
     rate = rate_field(pos.size, float(np.median(np.diff(pos))), o.rate_cov,
@@ -210,7 +219,8 @@ def predict(track: Track, traffic, law, options=None, *, progress=False):
     state = ballast.initial
     timing["beam"] += time.perf_counter() - clock
     acc = memory(law, shape)
-    snap_at = np.append(np.arange(0.0, total, every), total)
+    extra = [float(m) for m in o.snapshot_mgt if 0.0 < m < total]
+    snap_at = np.unique(np.concatenate([np.arange(0.0, total, every), extra, [total]]))
     level, mgt, geometry = np.zeros(shape), 0.0, track.geometry
     history = {"mgt": [0.0], "settlement": [level], "geometry": [geometry],
                "hanging_gap": [state.hanging_gap]}  # fmt: skip

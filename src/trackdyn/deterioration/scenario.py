@@ -38,8 +38,9 @@ geometry = "geometry.csv"
 supports = "supports.csv"
 # sections = "sections.csv"     # or a list of sections: name,geometry,supports
 rail = "60E1"                   # rail section for the load distribution (EI)
-start = "as measured"           # or "tamped"; default: tamped for the built-in example,
-                                # as measured for track files
+start = "as measured"           # or "tamped", or "as surveyed" (wavelengths < 3 m removed);
+                                # default: tamped for the built-in example, as measured
+                                # for track files
 ```
 """
 
@@ -124,14 +125,15 @@ class LoopSpec(Strict):
 
 class TrackSectionsSpec(Strict):
     """``[track]``: ``geometry`` and ``supports`` CSV files, or a ``sections`` CSV list;
-    ``rail`` section for the bending stiffness EI; ``start``, ``"tamped"`` or ``"as
-    measured"`` (default: tamped for the built-in example, as measured for files)."""
+    ``rail`` section for the bending stiffness EI; ``start``, ``"tamped"``, ``"as
+    measured"`` or ``"as surveyed"`` (default: tamped for the built-in example, as
+    measured for files)."""
 
     geometry: Path | None = None
     supports: Path | None = None
     sections: Path | None = None
     rail: str = "60E1"
-    start: Literal["tamped", "as measured"] | None = None
+    start: Literal["tamped", "as measured", "as surveyed"] | None = None
 
     @model_validator(mode="after")
     def _one_source(self):

@@ -30,7 +30,7 @@ TAMPED_D1_SD = 1.2e-3
 """D1 standard deviation after tamping, root mean square over the segments [m];
 illustrative: the middle of the 1-1.5 mm the example is meant to start from."""
 
-STARTS = ("tamped", "as measured")
+STARTS = ("tamped", "as measured", "as surveyed")
 """Start states of a deterioration run."""
 
 

@@ -1,0 +1,356 @@
+"""Fit settlement-law parameters to repeated geometry surveys (`trackdyn calibrate`).
+
+The calibration file is read by `trackdyn.deterioration.calibration_spec`. Each later
+survey is aligned to the first (`trackdyn.deterioration.surveys`). The model runs from the
+first survey (``[track] start``, default as surveyed: wavelengths under 3 m removed) over
+the tonnage to each later one (its cycle count starts there: only tonnage differences
+enter); each survey is aligned again to the profile predicted for it; the residuals are
+the predicted minus the measured D1-band change per rail, every `RESIDUAL_SPACING` (about
+independent samples of the band), leaving out `EDGE` at both ends and the ignored ranges.
+They are minimised by `scipy.optimize.least_squares` (trust-region reflective, soft-L1
+loss), in log space for parameters whose bounds are positive and as they are otherwise,
+within the ``min`` and ``max`` of the parameter file
+(`trackdyn.deterioration.settlement.law_bounds`). The Jacobian comes from forward
+differences of `FD_STEP`; a point and its neighbours run as one batch through
+`trackdyn.deterioration.sections.run_sections` (one Dask task per parameter set). Standard
+errors: ``σ² (JᵀJ)⁻¹`` at the solution, σ the robust (MAD) scale of the residuals, mapped
+to the parameters by the delta method.
+
+The settlement-rate field (``[settlement] rate_cov``) is not fitted: it is random per
+sleeper, so the surveys fix its statistics, not the values the model draws.
+
+References
+----------
+Branch, M.A., Coleman, T.F., Li, Y. (1999). A subspace, interior, and conjugate gradient
+method for large-scale bound-constrained minimization problems. SIAM Journal on Scientific
+Computing 21(1), 1-23.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from trackdyn.deterioration.calibration_spec import CalibrationScenario
+from trackdyn.deterioration.scenario import loop_options, resolve_inputs
+from trackdyn.deterioration.sections import Section, SectionTask, run_sections
+from trackdyn.deterioration.settlement import law_bounds, law_units
+from trackdyn.deterioration.surveys import (
+    REFINE,
+    align,
+    common_grid,
+    d1_change,
+    profiles_at,
+    read_survey,
+)
+from trackdyn.errors import TrackdynInputError
+from trackdyn.io import read_supports
+from trackdyn.track.quality import WAVEBANDS
+from trackdyn.track.track import Geometry, Track
+
+RESIDUAL_SPACING = WAVEBANDS["D1"][0] / 2
+"""Spacing of the residuals, half the shortest D1 wavelength [m]."""
+
+EDGE = WAVEBANDS["D1"][1] / 2
+"""Length left out at both ends, where the band-pass is less reliable [m]."""
+
+FD_STEP = 0.05
+"""Forward-difference step of the Jacobian in fit coordinates (log or as is) [-]."""
+
+
+@dataclass(frozen=True)
+class Problem:
+    """A calibration ready to run: aligned surveys, measured changes, fit coordinates.
+
+    Parameters
+    ----------
+    spec : CalibrationScenario
+        The calibration as read.
+    base : Path
+        Folder of the calibration file.
+    section : Section
+        First survey and supports files, the track the model runs on.
+    traffic : tuple of Traffic
+        Traffic of the period.
+    law : SettlementLaw
+        The law with its starting values.
+    names : tuple of str
+        Fitted parameters.
+    log : ndarray
+        Per fitted parameter: fitted in log space [bool].
+    lower, upper : ndarray
+        Bounds in fit coordinates.
+    mgt : ndarray
+        Tonnage of each survey after the first [MGT].
+    alignments : tuple of Alignment
+        Shift and correlation per survey against the first (the first: 0 and 1).
+    grid : ndarray
+        Indices of the first survey's distances compared.
+    x : ndarray
+        Those distances [m].
+    geometries : tuple of Geometry
+        The surveys as read.
+    first : ndarray
+        (2 rails, points) first survey's profiles on ``x`` [m].
+    valid : ndarray
+        Points not near the ends or in an ignored range [bool].
+    use : ndarray
+        Points of the residuals, ``valid`` every `RESIDUAL_SPACING` [bool].
+    fitted : ndarray
+        Per survey: its change is fitted (not the first, not a check) [bool].
+    options : LoopOptions
+        Loop options to the last survey; ``fit_options`` to the last fitted one.
+    """
+
+    spec: CalibrationScenario
+    base: Path
+    section: Section
+    traffic: tuple
+    law: object
+    names: tuple
+    log: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    mgt: np.ndarray
+    alignments: tuple
+    grid: np.ndarray
+    x: np.ndarray
+    geometries: tuple
+    first: np.ndarray
+    valid: np.ndarray
+    use: np.ndarray
+    fitted: np.ndarray
+    options: object
+    fit_options: object
+
+    def law_at(self, theta):
+        """The law with the fitted parameters at fit coordinates ``theta``."""
+        values = np.where(self.log, np.exp(theta), theta)
+        return dataclasses.replace(self.law, **dict(zip(self.names, values, strict=True)))
+
+    def start(self) -> np.ndarray:
+        """Fit coordinates of the starting values."""
+        values = np.array([getattr(self.law, n) for n in self.names])
+        return np.where(self.log, np.log(np.abs(values)), values)
+
+
+def _fit_coordinates(spec: CalibrationScenario, base: Path, law):
+    """Fitted names, log flags and bounds in fit coordinates; refuses unknown names,
+    missing bounds and starting values outside them."""
+    s = spec.settlement
+    file = None if s.file is None else base / s.file
+    known = law_units(s.law)
+    bounds = law_bounds(s.law, file)
+    where = s.file or "settlement.toml (shipped)"
+    log, lower, upper = [], [], []
+    for name in spec.fit.parameters:
+        if name not in known:
+            raise TrackdynInputError(
+                f"fit.parameters: {name!r} is not a parameter of the {s.law} law "
+                f"({', '.join(known)})"
+            )
+        if name not in bounds:
+            raise TrackdynInputError(f"{where}: [{s.law}] {name} needs min and max to be fitted")
+        lo, hi = bounds[name]
+        value = getattr(law, name)
+        if not lo <= value <= hi:
+            raise TrackdynInputError(
+                f"{where}: [{s.law}] {name} = {value:g} (SI) is outside its min and max"
+            )
+        positive = lo > 0
+        log.append(positive)
+        lower.append(np.log(lo) if positive else lo)
+        upper.append(np.log(hi) if positive else hi)
+    return tuple(spec.fit.parameters), np.array(log), np.array(lower), np.array(upper)
+
+
+def prepare(spec: CalibrationScenario, base: Path) -> Problem:
+    """Check the calibration, read and align the surveys, take the measured changes.
+
+    Everything is refused here, before any model run.
+
+    Parameters
+    ----------
+    spec : CalibrationScenario
+        The calibration.
+    base : Path
+        Folder that relative paths in it start from.
+    """
+    traffic, law = resolve_inputs(spec, base)
+    names, log, lower, upper = _fit_coordinates(spec, base, law)
+    files = [base / s.geometry for s in spec.survey]
+    geometries = [read_survey(f) for f in files]
+    supports_file = base / spec.track.supports
+    extent = Track(geometries[0], read_supports(supports_file)).extent
+    alignments = [None] * len(files)
+    for i, (g, file) in enumerate(zip(geometries, files, strict=True)):
+        a = align(geometries[0], g, spec.fit.max_shift_m)
+        if a.correlation < spec.fit.min_correlation:
+            raise TrackdynInputError(
+                f"survey {i + 1} ({file}): D1 profile correlates {a.correlation:.2f} with the "
+                f"first survey's at its best shift ({a.shift:+.2f} m within "
+                f"±{spec.fit.max_shift_m:g} m), below fit.min_correlation = "
+                f"{spec.fit.min_correlation:g}: not the same section?"
+            )
+        alignments[i] = a
+    shifts = [a.shift for a in alignments]
+    grid = common_grid(geometries[0], geometries, shifts, extent, REFINE)
+    x = geometries[0].distance[grid]
+    need = 2 * WAVEBANDS["D1"][1] + 2 * EDGE
+    if grid.size < 3 or x[-1] - x[0] < need:
+        raise TrackdynInputError(
+            f"{spec.track.supports}: the aligned surveys and the supports overlap over "
+            f"{(x[-1] - x[0]) if grid.size else 0:g} m; the fit needs {need:g} m"
+        )
+    valid = (x >= x[0] + EDGE) & (x <= x[-1] - EDGE)
+    for lo, hi in spec.fit.ignore_m:
+        valid &= (x < lo) | (x > hi)
+    stride = max(1, int(round(RESIDUAL_SPACING / float(np.median(np.diff(x))))))
+    use = valid & (np.arange(x.size) % stride == 0)
+    if not use.any():
+        raise TrackdynInputError("fit.ignore_m: leaves no distance to compare the surveys on")
+    mgt = np.array([s.mgt - spec.survey[0].mgt for s in spec.survey])
+    fitted = np.array([i > 0 and not s.check for i, s in enumerate(spec.survey)])
+    options = dataclasses.replace(
+        loop_options(spec, (spec.settlement.seed, 0)),
+        total_mgt=float(mgt[-1]),
+        snapshot_every_mgt=float(mgt[-1]),
+        snapshot_mgt=tuple(float(m) for m in mgt[1:]),
+    )
+    fit_options = dataclasses.replace(options, total_mgt=float(mgt[fitted].max()))
+    section = Section("calibration", str(files[0].resolve()), str(supports_file.resolve()))
+    first = profiles_at(geometries[0], 0.0, x)
+    return Problem(spec, base, section, tuple(traffic), law, names, log, lower, upper, mgt,
+                   tuple(alignments), grid, x, tuple(geometries), first, valid, use, fitted,
+                   options, fit_options)  # fmt: skip
+
+
+def run_laws(problem: Problem, laws, options, *, workers=None, scheduler=None) -> list:
+    """One deterioration run per law on the first survey, as one batch of Dask tasks.
+
+    Parameters
+    ----------
+    problem : Problem
+        The calibration.
+    laws : sequence of SettlementLaw
+        Parameter sets to run.
+    options : LoopOptions
+        Loop options (``problem.options`` or ``problem.fit_options``).
+    workers : int, optional
+        Worker processes (default one per core; 1 runs in this process).
+    scheduler : str, optional
+        Address of a running Dask scheduler.
+    """
+    tasks = [SectionTask(problem.section, problem.traffic, law, options) for law in laws]
+    return run_sections(tasks, workers=workers, scheduler=scheduler)
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """Measured and predicted D1-band change since the first survey, per survey.
+
+    Parameters
+    ----------
+    measured, predicted : ndarray
+        (surveys, 2 rails, points) change on ``Problem.x`` [m]; NaN for surveys beyond
+        the run's tonnage.
+    alignments : tuple of Alignment
+        Per survey: shift and correlation against the predicted profile (beyond the run,
+        and for the first survey: those against the first survey).
+    """
+
+    measured: np.ndarray
+    predicted: np.ndarray
+    alignments: tuple
+
+
+def compare(problem: Problem, ds) -> Comparison:
+    """Each survey aligned to the profile a run predicts for its tonnage, and the changes.
+
+    Parameters
+    ----------
+    problem : Problem
+        The calibration.
+    ds : xarray.Dataset
+        A run of `run_laws`.
+    """
+    snaps = ds.snapshot_mgt.values
+    distance = ds.distance.values
+    measured = np.full((problem.mgt.size, *problem.first.shape), np.nan)
+    predicted = measured.copy()
+    alignments = list(problem.alignments)
+    x, first = problem.x, problem.first
+    for k, m in enumerate(problem.mgt):
+        at = np.flatnonzero(np.isclose(snaps, m, rtol=1e-9, atol=1e-12))
+        if not at.size:
+            continue
+        profile = ds.profile.values[at[0]]
+        if k:
+            model = Geometry(distance, profile[0], profile[1], "prediction")
+            alignments[k] = align(model, problem.geometries[k], REFINE, problem.alignments[k].shift)
+        z = profiles_at(problem.geometries[k], alignments[k].shift, x)
+        measured[k] = d1_change(x, z - first)
+        predicted[k] = d1_change(x, (profile - ds.profile.values[0])[:, problem.grid])
+    return Comparison(measured, predicted, tuple(alignments))
+
+
+def residuals(problem: Problem, comparison: Comparison) -> np.ndarray:
+    """Predicted minus measured D1-band change of the fitted surveys at the residual
+    points, both rails [mm].
+
+    Parameters
+    ----------
+    problem : Problem
+        The calibration.
+    comparison : Comparison
+        `compare` of a run.
+    """
+    diff = (comparison.predicted - comparison.measured)[problem.fitted][:, :, problem.use]
+    return diff.ravel() * 1e3
+
+
+def synthetic_surveys(track, traffic, law, options, mgt, *, noise=0.3e-3, offset=2.7, seed=0):
+    """Surveys made by the model itself: for testing a calibration on known parameters.
+
+    The model runs from ``track`` with ``law`` and the profiles at the tonnages ``mgt`` get
+    white measurement noise; every survey but the first is offset in distance.
+
+    Parameters
+    ----------
+    track : Track
+        The true section.
+    traffic : sequence of Traffic
+        The traffic.
+    law : SettlementLaw
+        The true law.
+    options : LoopOptions
+        Loop options; ``total_mgt`` and the snapshots are set from ``mgt``.
+    mgt : sequence of float
+        Survey tonnages, the first 0, increasing [MGT].
+    noise : float
+        Standard deviation of the measurement noise [m].
+    offset : float
+        Distance offset of the later surveys: their distances read ``offset`` less [m].
+    seed : int
+        Seed of the noise.
+
+    Returns
+    -------
+    list of Geometry
+    """
+    from trackdyn.deterioration.loop import predict
+
+    o = dataclasses.replace(options, total_mgt=float(mgt[-1]), snapshot_every_mgt=float(mgt[-1]),
+                            snapshot_mgt=tuple(float(m) for m in mgt[1:]))  # fmt: skip
+    ds = predict(track, traffic, law, o)
+    rng = np.random.default_rng(seed)
+    x = track.geometry.distance
+    surveys = []
+    for k, m in enumerate(mgt):
+        at = int(np.argmin(np.abs(ds.snapshot_mgt.values - m)))
+        z = ds.profile.values[at] + rng.normal(0.0, noise, (2, x.size))
+        surveys.append(Geometry(x - (offset if k else 0.0), z[0], z[1], f"survey at {m:g} MGT"))
+    return surveys

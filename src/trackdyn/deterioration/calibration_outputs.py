@@ -1,0 +1,175 @@
+"""Files of a calibration: fitted parameter file, misfit per segment, figure."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from trackdyn.deterioration import plots
+from trackdyn.deterioration.calibrate import Problem
+from trackdyn.deterioration.fitting import FitResult
+from trackdyn.deterioration.settlement import BOUNDS, law_file_table, law_units
+from trackdyn.deterioration.surveys import d1_change
+from trackdyn.track.quality import segment_sd
+from trackdyn.track.track import RAILS
+from trackdyn.units import UNITS
+
+FILES = ("settlement_fitted.toml", "calibration.csv", "calibration.png")
+"""Files a calibration writes."""
+
+
+def _rms(values) -> float:
+    return float(np.sqrt(np.mean(np.square(values)))) if np.size(values) else np.nan
+
+
+def segment_table(problem: Problem, result: FitResult) -> pd.DataFrame:
+    """Misfit and D1 standard deviation per later survey, rail and segment.
+
+    Columns: ``survey``, ``mgt`` [MGT], ``role`` (fit or check), ``rail``,
+    ``segment_start_m``, ``segment_end_m`` [m], ``shift_m`` [m] (at the fit),
+    ``change_rms_mm`` (measured D1-band change), ``misfit_rms_mm`` and
+    ``misfit_rms_start_mm`` (predicted minus measured change with the fitted and the
+    starting values), ``d1_sd_mm`` (measured), ``d1_sd_predicted_mm`` and
+    ``d1_sd_predicted_start_mm`` [mm]: the first survey's D1 level plus the predicted change.
+    Points near the ends and in ignored ranges are left out.
+
+    Parameters
+    ----------
+    problem : Problem
+        The calibration.
+    result : FitResult
+        The fit.
+    """
+    x, valid = problem.x, problem.valid
+    bounds = segment_sd(x, np.zeros_like(x), problem.spec.loop.segment_length_m)
+    first = d1_change(x, problem.first)
+    fit, start = result.comparison, result.start_comparison
+    rows = []
+    for k in range(1, problem.mgt.size):
+        for r, rail in enumerate(RAILS):
+            for lo, hi in zip(bounds["segment_start_m"], bounds["segment_end_m"], strict=True):
+                at = valid & (x >= lo) & (x <= hi)
+                meas, pred, pred0 = (c[k, r, at] * 1e3 for c in
+                                     (fit.measured, fit.predicted, start.predicted))  # fmt: skip
+                base = first[r, at] * 1e3
+                rows.append({
+                    "survey": Path(problem.spec.survey[k].geometry).name,
+                    "mgt": problem.spec.survey[k].mgt,
+                    "role": "fit" if problem.fitted[k] else "check",
+                    "rail": rail,
+                    "segment_start_m": lo,
+                    "segment_end_m": hi,
+                    "shift_m": fit.alignments[k].shift,
+                    "change_rms_mm": _rms(meas),
+                    "misfit_rms_mm": _rms(pred - meas),
+                    "misfit_rms_start_mm": _rms(pred0 - meas),
+                    "d1_sd_mm": np.std(base + meas) if at.any() else np.nan,
+                    "d1_sd_predicted_mm": np.std(base + pred) if at.any() else np.nan,
+                    "d1_sd_predicted_start_mm": np.std(base + pred0) if at.any() else np.nan,
+                })  # fmt: skip
+    return pd.DataFrame(rows)
+
+
+def sd_errors(table: pd.DataFrame) -> pd.DataFrame:
+    """RMS over rails and segments of the predicted minus measured D1 SD per survey [mm],
+    with the fitted (``error_mm``) and the starting values (``error_start_mm``).
+
+    Parameters
+    ----------
+    table : DataFrame
+        `segment_table` of a calibration.
+    """
+    t = table.dropna(subset=["d1_sd_mm"])
+    rows = []
+    for (survey, mgt, role), g in t.groupby(["survey", "mgt", "role"], sort=False):
+        rows.append({
+            "survey": survey, "mgt": mgt, "role": role,
+            "error_mm": _rms(g.d1_sd_predicted_mm - g.d1_sd_mm),
+            "error_start_mm": _rms(g.d1_sd_predicted_start_mm - g.d1_sd_mm),
+        })  # fmt: skip
+    return pd.DataFrame(rows)
+
+
+def _toml_entry(entry: dict) -> str:
+    keys = ["value", "unit", *[b for b in BOUNDS if b in entry], "source"]
+    parts = []
+    for key in keys:
+        v = entry[key]
+        parts.append(f"{key} = {json.dumps(v) if isinstance(v, str) else format(v, '.6g')}")
+    return "{ " + ", ".join(parts) + " }"
+
+
+def parameter_file(problem: Problem, result: FitResult, where: str) -> str:
+    """A settlement parameter file (TOML) with the fitted values, for `trackdyn
+    deteriorate`'s ``[settlement] file``.
+
+    Fitted parameters keep the unit and bounds of the file they started from, with the
+    surveys and the standard error as source; overridden ones are written in SI units;
+    the others are copied.
+
+    Parameters
+    ----------
+    problem : Problem
+        The calibration.
+    result : FitResult
+        The fit.
+    where : str
+        The calibration file, named in the sources.
+    """
+    s = problem.spec.settlement
+    table = law_file_table(s.law, None if s.file is None else problem.base / s.file)
+    surveys = ", ".join(
+        f"{Path(v.geometry).name} ({v.mgt:g} MGT)"
+        for v, used in zip(problem.spec.survey, problem.fitted, strict=True)
+        if used or v is problem.spec.survey[0]
+    )
+    fitted = dict(zip(problem.names, zip(result.values, result.standard_errors, strict=True),
+                      strict=True))  # fmt: skip
+    lines = [
+        f"# Settlement law parameters fitted by `trackdyn calibrate {Path(where).name}`.",
+        f"# Surveys: {surveys}; supports {Path(problem.spec.track.supports).name}.",
+        "",
+        f"[{s.law}]",
+    ]
+    if "description" in table:
+        lines.append(f"description = {json.dumps(table['description'])}")
+    for name, si_unit in law_units(s.law).items():
+        entry = dict(table.get(name, {}))
+        if name in fitted:
+            value, se = fitted[name]
+            factor = UNITS[entry["unit"]][1]
+            entry["value"] = value / factor
+            entry["source"] = (
+                f"fitted by trackdyn calibrate ({Path(where).name}) to the D1-band change of "
+                f"the surveys {surveys}; standard error {se / factor:.3g} {entry['unit']}"
+            )
+        elif name in s.overrides:
+            entry = {"value": s.overrides[name], "unit": si_unit,
+                     "source": f"[settlement] overrides of {Path(where).name}"}  # fmt: skip
+        lines.append(f"{name} = {_toml_entry(entry)}")
+    return "\n".join(lines) + "\n"
+
+
+def write_calibration(problem: Problem, result: FitResult, folder, where: str) -> pd.DataFrame:
+    """Write `FILES` into ``folder``; returns the segment table.
+
+    Parameters
+    ----------
+    problem : Problem
+        The calibration.
+    result : FitResult
+        The fit.
+    folder : Path
+        Output (staging) folder.
+    where : str
+        The calibration file.
+    """
+    folder = Path(folder)
+    (folder / FILES[0]).write_text(parameter_file(problem, result, where))
+    table = segment_table(problem, result)
+    table.to_csv(folder / FILES[1], index=False, float_format="%.4g")
+    plots.calibration(problem, result, folder / FILES[2])
+    return table
