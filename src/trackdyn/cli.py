@@ -336,6 +336,7 @@ def calibrate(
     from trackdyn.deterioration.calibration_spec import load_calibration
     from trackdyn.deterioration.fitting import fit
     from trackdyn.deterioration.settlement import law_units
+    from trackdyn.parallel import shared_cluster
 
     if workers is not None and workers < 1:
         raise TrackdynInputError(f"--workers must be >= 1, got {workers}")
@@ -348,7 +349,7 @@ def calibrate(
         role = "first" if s is spec.survey[0] else "fit" if used else "check"
         show.add_row(s.geometry.name, f"{s.mgt:g}", role, f"{a.shift:+.3f}", f"{a.correlation:.3f}")
     console.print(show)
-    with output_folder(out, "calibrate", overwrite) as stage:
+    with output_folder(out, "calibrate", overwrite) as stage, shared_cluster(workers, scheduler):
         result = fit(problem, workers=workers, scheduler=scheduler, log=console.print)
         table = write_calibration(problem, result, stage, str(calibration))
     units = law_units(spec.settlement.law)

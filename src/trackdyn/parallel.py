@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import functools
 import os
+from contextlib import contextmanager
+from contextvars import ContextVar
 
 from trackdyn.errors import TrackdynInputError
 from trackdyn.progress import progress_bar
@@ -53,6 +55,40 @@ def _client(workers: int | None, scheduler: str | None):
             dashboard_address=":0",
         )
     return Client(cluster), cluster
+
+
+_shared: ContextVar = ContextVar("trackdyn_shared_client", default=None)
+
+
+@contextmanager
+def shared_cluster(workers: int | None = None, scheduler: str | None = None):
+    """Keep one Dask client (and local cluster) for every `run_tasks` call in the block.
+
+    For work that calls `run_tasks` many times (the model runs of each iteration of a
+    fit): the cluster starts once instead of at each call. With ``workers=1`` and no
+    scheduler nothing is started and the tasks run in this process.
+
+    Parameters
+    ----------
+    workers : int, optional
+        Worker processes of the local cluster (default: one per core).
+    scheduler : str, optional
+        Address of an existing Dask scheduler.
+    """
+    if workers is not None and workers < 1:
+        raise TrackdynInputError(f"--workers must be >= 1, got {workers}")
+    if workers == 1 and not scheduler:
+        yield
+        return
+    client, cluster = _client(workers, scheduler)
+    token = _shared.set(client)
+    try:
+        yield
+    finally:
+        _shared.reset(token)
+        client.close()
+        if cluster is not None:
+            cluster.close()
 
 
 def _on_one_core(func, task):
@@ -107,13 +143,15 @@ def run_tasks(
             return results
         from distributed import as_completed
 
-        client, cluster = _client(workers, scheduler)
+        shared = _shared.get()
+        client, cluster = (shared, None) if shared is not None else _client(workers, scheduler)
         try:
             futures = client.map(functools.partial(_on_one_core, func), tasks, pure=False)
             for _ in as_completed(futures):
                 bar.advance()
             return client.gather(futures)
         finally:
-            client.close()
-            if cluster is not None:
-                cluster.close()
+            if shared is None:
+                client.close()
+                if cluster is not None:
+                    cluster.close()
