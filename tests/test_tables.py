@@ -71,3 +71,16 @@ def test_study_table_keeps_each_run_and_its_failure():
     np.testing.assert_array_equal(ds.wheel_load_psd.isel(run=0), psd)
     assert np.isnan(ds.wheel_load_psd.isel(run=1)).all()
     assert ds.dyn_load_sd_kN.attrs["units"] == "kN" and ds.frequency.attrs["units"] == "Hz"
+
+
+def test_figure_envelope_keeps_every_peak():
+    from trackdyn.plots import _envelope
+
+    # 60 000 samples of a 1 kHz run thinned for a full-length panel: the extremes of every
+    # stretch of 30 samples survive, so no peak of the wheel load disappears from the plot
+    t = np.arange(60_000) * DT
+    y = np.sin(2 * np.pi * 3.0 * t) + 0.1 * np.sin(2 * np.pi * 170.0 * t)
+    x, e = _envelope(t, y, points=4000)
+    assert x.size == e.size == 4000
+    assert e.max() == y.max() and e.min() == y.min()
+    np.testing.assert_array_equal(e[1::2], y.reshape(2000, 30).max(axis=1))
