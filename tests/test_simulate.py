@@ -129,3 +129,9 @@ def test_api_arguments_of_the_wrong_kind(lin, args, match):
     vehicle, track, options = (given.get(a, a) if isinstance(a, str) else a for a in args)
     with pytest.raises(TrackdynInputError, match=match):
         simulate(vehicle, track, options)
+
+
+def test_numpy_values_are_shown_as_plain_numbers():
+    # values computed with numpy reach messages as the number, not "np.float64(...)"
+    with pytest.raises(TrackdynInputError, match=r"k1 must be > 0, got -5.0$"):
+        V.replace(k1=np.float64(-5.0))

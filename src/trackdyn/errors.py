@@ -13,6 +13,15 @@ class TrackdynInputError(ValueError):
     """
 
 
+def shown(value) -> str:
+    """``value`` as a message shows it: numpy scalars and arrays as plain Python values."""
+    if isinstance(value, np.generic):
+        value = value.item()
+    elif isinstance(value, np.ndarray):
+        value = value.tolist()
+    return repr(value)
+
+
 def require_positive(name: str, value) -> np.ndarray:
     """Return ``value`` as a float array after checking it is finite and > 0.
 
@@ -26,9 +35,9 @@ def require_positive(name: str, value) -> np.ndarray:
     try:
         arr = np.asarray(value, dtype=float)
     except (TypeError, ValueError):
-        raise TrackdynInputError(f"{name} must be a number, got {value!r}") from None
+        raise TrackdynInputError(f"{name} must be a number, got {shown(value)}") from None
     if arr.size == 0 or not np.all(np.isfinite(arr)) or np.any(arr <= 0):
-        raise TrackdynInputError(f"{name} must be finite and > 0, got {value!r}")
+        raise TrackdynInputError(f"{name} must be finite and > 0, got {shown(value)}")
     return arr
 
 

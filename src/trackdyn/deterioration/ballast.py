@@ -48,7 +48,7 @@ import numpy as np
 from scipy.ndimage import median_filter
 
 from trackdyn.deterioration.railseat import RailBeam, RailRest, Windows, rest_state
-from trackdyn.errors import TrackdynInputError
+from trackdyn.errors import TrackdynInputError, shown
 from trackdyn.track.synthetic import correlated_field
 from trackdyn.track.track import RAILS, Geometry, LinearisedTrack
 from trackdyn.units import GRAVITY
@@ -78,9 +78,11 @@ def rate_field(n: int, spacing: float, cov: float, correlation_length: float, se
         Seed of the field.
     """
     if not 0 <= cov < np.inf:
-        raise TrackdynInputError(f"rate_cov must be >= 0, got {cov!r}")
+        raise TrackdynInputError(f"rate_cov must be >= 0, got {shown(cov)}")
     if not 0 < correlation_length < np.inf:
-        raise TrackdynInputError(f"rate_correlation_length must be > 0, got {correlation_length!r}")
+        raise TrackdynInputError(
+            f"rate_correlation_length must be > 0, got {shown(correlation_length)}"
+        )
     rng = np.random.default_rng(seed)
     common = correlated_field(n, spacing, correlation_length, rng)
     c = RAIL_CORRELATION

@@ -43,7 +43,7 @@ from trackdyn.deterioration.loads import TrafficRun, passages
 from trackdyn.deterioration.results import d1_sd, make_dataset
 from trackdyn.deterioration.surveys import surveyed_geometry
 from trackdyn.deterioration.tamping import STARTS, tamped_geometry
-from trackdyn.errors import TrackdynInputError, require_positive
+from trackdyn.errors import TrackdynInputError, require_positive, shown
 from trackdyn.options import RunOptions
 from trackdyn.progress import progress_bar
 from trackdyn.track.rails import rail_section
@@ -272,7 +272,9 @@ def _runs(track: Track, traffic, o: LoopOptions):
     lins, runs = {}, []
     for t in traffic:
         if not 0 <= t.passages_per_mgt < np.inf:
-            raise TrackdynInputError(f"passages_per_mgt must be >= 0, got {t.passages_per_mgt!r}")
+            raise TrackdynInputError(
+                f"passages_per_mgt must be >= 0, got {shown(t.passages_per_mgt)}"
+            )
         require_positive("speed", t.speed)
         if t.passages_per_mgt > 0:
             load = t.vehicle.static_wheel_load

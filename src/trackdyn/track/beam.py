@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.linalg import LinAlgError, solveh_banded
 
-from trackdyn.errors import TrackdynInputError
+from trackdyn.errors import TrackdynInputError, shown
 
 
 def _frozen(name, value, ndim):
@@ -279,7 +279,8 @@ def _check(name, value, integer=False):
         ok = isinstance(value, int | float | np.number) and bool(np.isfinite(value) and value > 0)
     if not ok:
         raise TrackdynInputError(
-            f"{name} must be {'an integer >= 1' if integer else 'finite and > 0'}, got {value!r}"
+            f"{name} must be {'an integer >= 1' if integer else 'finite and > 0'}, "
+            f"got {shown(value)}"
         )
 
 

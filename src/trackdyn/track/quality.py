@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 from scipy import signal
 
-from trackdyn.errors import TrackdynInputError, check_series
+from trackdyn.errors import TrackdynInputError, check_series, shown
 
 WAVEBANDS: dict[str, tuple[float, float]] = {
     "D1": (3.0, 25.0),
@@ -142,7 +142,9 @@ def segment_sd(distance, level, segment_length: float = 200.0) -> pd.DataFrame:
     x, v = check_series(distance, level, name="level")
     seg = float(segment_length)
     if not (np.isfinite(seg) and seg > 0):
-        raise TrackdynInputError(f"segment_length must be finite and > 0, got {segment_length!r}")
+        raise TrackdynInputError(
+            f"segment_length must be finite and > 0, got {shown(segment_length)}"
+        )
     span = x[-1] - x[0]
     tol = 1e-9 * seg
     n_full = int(np.floor(span / seg + 1e-9))

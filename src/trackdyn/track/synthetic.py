@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from trackdyn.errors import TrackdynInputError
+from trackdyn.errors import TrackdynInputError, shown
 from trackdyn.track.spectra import generate_profile
 from trackdyn.track.support import SupportCurve
 from trackdyn.track.track import Geometry, Supports, Track
@@ -111,7 +111,9 @@ def correlated_field(n: int, spacing: float, correlation_length: float, rng) -> 
     ``exp(-(d / correlation_length)^2)``.
     """
     if correlation_length <= 0:
-        raise TrackdynInputError(f"correlation_length must be > 0, got {correlation_length!r} m")
+        raise TrackdynInputError(
+            f"correlation_length must be > 0, got {shown(correlation_length)} m"
+        )
     sigma = correlation_length / np.sqrt(2) / spacing
     half = int(np.ceil(4 * sigma))
     kernel = np.exp(-0.5 * (np.arange(-half, half + 1) / sigma) ** 2)

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from importlib.resources import files
 from pathlib import Path
 
-from trackdyn.errors import TrackdynInputError
+from trackdyn.errors import TrackdynInputError, shown
 from trackdyn.io import read_toml
 from trackdyn.units import GRAVITY, si_value
 
@@ -94,11 +94,15 @@ class Vehicle:
         for key in PARAMETERS:
             value = getattr(self, key)
             if isinstance(value, bool) or not isinstance(value, int | float):
-                raise TrackdynInputError(f"vehicle parameter {key} must be a number, got {value!r}")
+                raise TrackdynInputError(
+                    f"vehicle parameter {key} must be a number, got {shown(value)}"
+                )
             lower_ok = key in MAY_BE_ZERO
             if not math.isfinite(value) or value < 0 or (value == 0 and not lower_ok):
                 need = ">= 0" if lower_ok else "> 0"
-                raise TrackdynInputError(f"vehicle parameter {key} must be {need}, got {value!r}")
+                raise TrackdynInputError(
+                    f"vehicle parameter {key} must be {need}, got {shown(value)}"
+                )
         if not 0 < self.alpha_w < math.pi / 2:
             raise TrackdynInputError(
                 f"vehicle parameter alpha_w must be in (0, 90) deg, got "
