@@ -63,7 +63,7 @@ def quality_evolution(ds, path, title: str = "") -> None:
     title : str
         Figure title.
     """
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), sharey=True)
+    fig, axes = plt.subplots(1, 2, figsize=(12.5, 4.5), sharey=True)
     colours = plt.cm.tab10(np.arange(ds.sizes["segment"]) % 10)
     threshold = float(ds.attrs["option_threshold_sd_mm"])
     for ax, rail in zip(axes, ds.rail.values, strict=True):
@@ -82,7 +82,7 @@ def quality_evolution(ds, path, title: str = "") -> None:
         ax.set_xlabel("accumulated traffic [MGT]")
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("D1 standard deviation [mm]")
-    axes[1].legend(fontsize=7, loc="best")
+    axes[1].legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1))  # clear of the data
     fig.suptitle(title or "Geometry quality per segment")
     save(fig, path)
 
