@@ -312,19 +312,6 @@ class VarandasLaw(LawParameters):
         a = self.alpha + 1
         return float(self.F0**a / a * harmonic(self.N0, self.beta))
 
-    def constant_load(self, F, N):
-        """Settlement after ``N`` cycles of the constant peak load ``F`` [m] (closed form).
-
-        Parameters
-        ----------
-        F : array_like
-            Peak rail-seat load [N].
-        N : array_like
-            Cycles [-].
-        """
-        S = harmonic(N, self.beta) / harmonic(self.N0, self.beta)
-        return self.gamma * (np.asarray(F, dtype=float) / self.F0) ** (self.alpha + 1) * S
-
 
 LAWS: dict[str, type[LawParameters]] = {
     "power": PowerLaw,

@@ -24,7 +24,6 @@ from trackdyn.errors import TrackdynInputError
 from trackdyn.vehicle.assembly import Assembly, Body, Contact, Damper, Model, Point, Spring, Wedge
 from trackdyn.vehicle.parameters import Vehicle
 
-GROUND = Point(None)
 SIDES = (("L", 1.0, "left"), ("R", -1.0, "right"))
 
 
