@@ -335,7 +335,7 @@ def calibrate(
     from trackdyn.deterioration.calibration_outputs import sd_errors, write_calibration
     from trackdyn.deterioration.calibration_spec import load_calibration
     from trackdyn.deterioration.fitting import fit
-    from trackdyn.deterioration.settlement import law_units
+    from trackdyn.deterioration.law_files import law_units
     from trackdyn.parallel import shared_cluster
 
     if workers is not None and workers < 1:

@@ -5,14 +5,13 @@ import re
 import numpy as np
 import pytest
 
+from trackdyn.deterioration.law_files import law_bounds, load_law
 from trackdyn.deterioration.loop import step_size
 from trackdyn.deterioration.settlement import (
     LAWS,
     PowerLaw,
     SatoLaw,
     ShentonLaw,
-    law_bounds,
-    load_law,
     time_hardening_increment,
 )
 from trackdyn.errors import TrackdynInputError
@@ -81,7 +80,7 @@ def test_step_size_meets_the_limit_exactly():
 
 
 def test_shipped_file_gives_value_unit_source_and_is_labelled_illustrative():
-    from trackdyn.deterioration.settlement import DEFAULT_FILE
+    from trackdyn.deterioration.law_files import DEFAULT_FILE
 
     data = read_toml(DEFAULT_FILE)
     assert set(data) == set(LAWS)

@@ -5,6 +5,7 @@ parameters; `trackdyn.deterioration.sections` reads scenario files and runs many
 through Dask.
 """
 
+from trackdyn.deterioration.law_files import load_law
 from trackdyn.deterioration.loop import LoopOptions, Traffic, predict
 from trackdyn.deterioration.settlement import (
     LAWS,
@@ -13,7 +14,6 @@ from trackdyn.deterioration.settlement import (
     SettlementLaw,
     ShentonLaw,
     VarandasLaw,
-    load_law,
     time_hardening_increment,
 )
 

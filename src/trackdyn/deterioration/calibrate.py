@@ -10,7 +10,7 @@ independent samples of the band), leaving out `EDGE` at both ends and the ignore
 They are minimised by `scipy.optimize.least_squares` (trust-region reflective, soft-L1
 loss), in log space for parameters whose bounds are positive and as they are otherwise,
 within the ``min`` and ``max`` of the parameter file
-(`trackdyn.deterioration.settlement.law_bounds`). The Jacobian comes from forward
+(`trackdyn.deterioration.law_files.law_bounds`). The Jacobian comes from forward
 differences of `FD_STEP`; a point and its neighbours run as one batch through
 `trackdyn.deterioration.sections.run_sections` (one Dask task per parameter set). Standard
 errors: ``σ² (JᵀJ)⁻¹`` at the solution, σ the robust (MAD) scale of the residuals, mapped
@@ -35,9 +35,9 @@ from pathlib import Path
 import numpy as np
 
 from trackdyn.deterioration.calibration_spec import CalibrationScenario
+from trackdyn.deterioration.law_files import law_bounds, law_units
 from trackdyn.deterioration.scenario import loop_options, resolve_inputs
 from trackdyn.deterioration.sections import Section, SectionTask, run_sections
-from trackdyn.deterioration.settlement import law_bounds, law_units
 from trackdyn.deterioration.surveys import (
     REFINE,
     align,

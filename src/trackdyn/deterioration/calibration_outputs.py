@@ -11,7 +11,7 @@ import pandas as pd
 from trackdyn.deterioration import plots
 from trackdyn.deterioration.calibrate import Problem
 from trackdyn.deterioration.fitting import FitResult
-from trackdyn.deterioration.settlement import BOUNDS, law_file_table, law_units
+from trackdyn.deterioration.law_files import BOUNDS, law_file_table, law_units
 from trackdyn.deterioration.surveys import d1_change
 from trackdyn.track.quality import segment_sd
 from trackdyn.track.track import RAILS

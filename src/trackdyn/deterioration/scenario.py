@@ -227,9 +227,9 @@ def resolve_inputs(spec: DeteriorationScenario, base: Path):
     traffic : list of Traffic
     law : SettlementLaw
     """
+    from trackdyn.deterioration.law_files import load_law
     from trackdyn.deterioration.loads import cycles_per_passage
     from trackdyn.deterioration.loop import Traffic
-    from trackdyn.deterioration.settlement import load_law
     from trackdyn.track.rails import rail_section
     from trackdyn.vehicle.models import build_model
 

@@ -23,7 +23,8 @@ law           ``g(N)``                                   own parameters
 files give ``value``, ``unit`` and ``source`` for each parameter, one table per law; the
 shipped ``settlement.toml`` holds illustrative values that are not calibrated. A parameter
 may also give ``min`` and ``max`` (in its ``unit``): the range `trackdyn calibrate` may fit
-it in (`law_bounds`); the model itself does not use them.
+it in; the model itself does not use them. Reading parameter files:
+`trackdyn.deterioration.law_files`.
 
 References
 ----------
@@ -41,17 +42,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
-from importlib.resources import files
 from typing import ClassVar
 
 import numpy as np
 
 from trackdyn.errors import TrackdynInputError
-from trackdyn.io import read_toml
-from trackdyn.units import si_value
-
-DEFAULT_FILE = files("trackdyn.deterioration").joinpath("settlement.toml")
-"""The shipped parameter file (illustrative values, not calibrated)."""
 
 COMMON = {"Q_ref": "N", "load_exponent": "-", "k_ref": "N/m", "stiffness_exponent": "-"}
 """Parameters of the load and stiffness factor, shared by all laws, and their SI units."""
@@ -341,109 +336,3 @@ def time_hardening_increment(law: SettlementLaw, factor, N, dN):
     """
     N = np.asarray(N, dtype=float)
     return np.asarray(factor) * (law.cycles(N + dN) - law.cycles(N))
-
-
-BOUNDS = ("min", "max")
-"""Optional keys of a parameter entry: the range a fit may move the parameter in."""
-
-
-def _law_table(name: str, path) -> tuple[type[LawParameters], dict, str]:
-    """The law's class, its ``[name]`` table from the parameter file, and the file's name."""
-    if name not in LAWS:
-        raise TrackdynInputError(f"unknown settlement law {name!r}; known: {', '.join(LAWS)}")
-    where = str(path) if path is not None else "settlement.toml (shipped)"
-    data = read_toml(path if path is not None else DEFAULT_FILE)
-    if name not in data or not isinstance(data[name], dict):
-        raise TrackdynInputError(f"{where}: no table [{name}] for the {name} law")
-    return LAWS[name], data[name], where
-
-
-def law_units(name: str) -> dict[str, str]:
-    """The parameters of the law ``name`` and their SI units, shared ones first."""
-    cls = LAWS[name]
-    return {**cls.common, **cls.units}
-
-
-def law_file_table(name: str, path=None) -> dict:
-    """The ``[name]`` table of a parameter file as written: ``description`` and per
-    parameter ``value``, ``unit``, ``source`` and optional ``min``/``max``, unconverted.
-
-    Parameters
-    ----------
-    name : str
-        Law name, a key of `LAWS`.
-    path : path, optional
-        Parameter file; default the shipped illustrative file.
-    """
-    return _law_table(name, path)[1]
-
-
-def law_bounds(name: str, path=None) -> dict[str, tuple[float, float]]:
-    """The ``min`` and ``max`` the parameter file gives for the law's parameters [SI units].
-
-    Parameters without both are left out.
-
-    Parameters
-    ----------
-    name : str
-        Law name, a key of `LAWS`.
-    path : path, optional
-        Parameter file; default the shipped illustrative file.
-    """
-    _, table, where = _law_table(name, path)
-    expected = law_units(name)
-    bounds = {}
-    for key, entry in table.items():
-        if key not in expected or not isinstance(entry, dict):
-            continue
-        have = [b for b in BOUNDS if b in entry]
-        if len(have) == 1:
-            raise TrackdynInputError(f"{where}: [{name}] {key} gives {have[0]} but not both")
-        if have:
-            base = {k: v for k, v in entry.items() if k not in BOUNDS}
-            lo, hi = (
-                si_value({**base, "value": entry[b]}, f"{key} {b}", expected[key], where)
-                for b in BOUNDS
-            )
-            if not lo < hi:
-                raise TrackdynInputError(f"{where}: [{name}] {key} needs min < max")
-            bounds[key] = (lo, hi)
-    return bounds
-
-
-def load_law(name: str, path=None, **overrides) -> LawParameters:
-    """A settlement law with parameters from a TOML file.
-
-    Parameters
-    ----------
-    name : str
-        Law name, a key of `LAWS`.
-    path : path, optional
-        Parameter file with a table ``[<name>]`` whose entries are tables with ``value``,
-        ``unit`` and ``source`` (optionally ``min`` and ``max``, see `law_bounds`); default
-        the shipped illustrative file.
-    **overrides : float
-        Parameter values replacing the file's [SI units].
-    """
-    cls, table, where = _law_table(name, path)
-    expected = law_units(name)
-    values = {}
-    for key, entry in table.items():
-        if key == "description":
-            continue
-        if key not in expected:
-            raise TrackdynInputError(f"{where}: [{name}] unknown parameter {key!r}")
-        if isinstance(entry, dict):
-            entry = {k: v for k, v in entry.items() if k not in BOUNDS}
-        values[key] = si_value(entry, key, expected[key], f"{where}: [{name}]")
-    unknown = sorted(set(overrides) - set(expected))
-    if unknown:
-        raise TrackdynInputError(f"unknown settlement parameter {unknown[0]!r} for {name}")
-    values.update({k: float(v) for k, v in overrides.items()})
-    missing = [k for k in expected if k not in values]
-    if missing:
-        raise TrackdynInputError(f"{where}: [{name}] missing parameter {missing[0]}")
-    try:
-        return cls(**values)
-    except TrackdynInputError as exc:
-        raise TrackdynInputError(f"{where}: [{name}] {exc}") from None
