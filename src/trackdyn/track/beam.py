@@ -16,6 +16,7 @@ import numpy as np
 from scipy.linalg import LinAlgError, solveh_banded
 
 from trackdyn.errors import TrackdynInputError, shown
+from trackdyn.track.beam_elements import band_times, hermite, stiffness_band
 
 
 def _frozen(name, value, ndim):
@@ -135,74 +136,6 @@ def linear_supports(position, stiffness, gap=0.0, *, tensionless=True) -> Suppor
     return SupportCurves(pos, d, f, tensionless=bool(tensionless))
 
 
-def hermite(s, length):
-    """Cubic Hermite shape functions of a beam element.
-
-    Parameters
-    ----------
-    s : array_like
-        Local coordinate, 0 at the first node and 1 at the second [-].
-    length : array_like
-        Element length, broadcast against ``s`` [m].
-
-    Returns
-    -------
-    ndarray, shape (4,) + broadcast shape
-        Shape functions of (w1, theta1, w2, theta2): the deflection at ``s`` per unit nodal
-        deflection [-] and per unit nodal rotation [m].
-    """
-    s2, s3 = s * s, s * s * s
-    return np.stack([1 - 3 * s2 + 2 * s3, length * (s - 2 * s2 + s3), 3 * s2 - 2 * s3,
-                     length * (s3 - s2)])  # fmt: skip
-
-
-_KE = np.array([[12, 6, -12, 6], [6, 4, -6, 2], [-12, -6, 12, -6], [6, 2, -6, 4]], dtype=float)
-_POWER = np.array([0, 1, 0, 1]) - 1.5  # K[i, j] = EI ke[i, j] L^(power[i] + power[j])
-
-
-def element_stiffness(length, EI):
-    """Stiffness matrices of Euler-Bernoulli (Hermite cubic) beam elements.
-
-    Parameters
-    ----------
-    length : array_like
-        Element lengths [m].
-    EI : float
-        Bending stiffness [N m^2].
-
-    Returns
-    -------
-    ndarray, shape ``length.shape + (4, 4)``
-        In the order (w1, theta1, w2, theta2) [N/m, N, N m].
-    """
-    L = np.asarray(length, dtype=float)[..., None, None]
-    return EI * _KE * L ** (_POWER[:, None] + _POWER[None, :])
-
-
-def stiffness_band(x, EI):
-    """Beam stiffness of a rail with nodes ``x``, in LAPACK upper banded form.
-
-    Parameters
-    ----------
-    x : array_like
-        Node positions, strictly increasing [m].
-    EI : float
-        Bending stiffness [N m^2].
-
-    Returns
-    -------
-    ndarray, shape (4, 2 len(x))
-        ``band[3 + i - j, j] = K[i, j]`` for ``i <= j``, degrees of freedom (w, theta) per
-        node (`scipy.linalg.solveh_banded`).
-    """
-    L = np.diff(np.asarray(x, dtype=float))
-    e, ke = 2 * np.arange(L.size), element_stiffness(L, EI)
-    band = np.zeros((4, 2 * L.size + 2))
-    for i, j in zip(*np.triu_indices(4), strict=True):
-        band[3 + i - j, e + j] += ke[:, i, j]
-    return band
-
-
 @dataclass(frozen=True)
 class BeamSolution:
     """Static solution of :func:`solve_beam`.
@@ -298,15 +231,6 @@ def _mesh(support_x, load_x, max_element):
     return np.r_[np.repeat(keys[:-1], count) + step * np.repeat(span / count, count), keys[-1]]
 
 
-def _band_times(band, u):
-    """``K @ u`` for a symmetric matrix in LAPACK upper banded form with 3 superdiagonals."""
-    out = band[3] * u
-    for k in (1, 2, 3):
-        out[:-k] += band[3 - k, k:] * u[k:]
-        out[k:] += band[3 - k, k:] * u[:-k]
-    return out
-
-
 def solve_beam(
     supports, EI, load_position, load, *, max_element=0.15, load_steps=10, tol=1e-9, max_iter=50
 ) -> BeamSolution:
@@ -391,12 +315,12 @@ def solve_beam(
 
     def residual(u, f):
         fs, kt = supports.force_and_tangent(u[w])
-        r = f - _band_times(band, u)
+        r = f - band_times(band, u)
         r[w] -= fs
         return r, kt
 
     def converged(u, r, f):
-        floor = 8 * np.finfo(float).eps * np.linalg.norm(_band_times(abs_band, np.abs(u)))
+        floor = 8 * np.finfo(float).eps * np.linalg.norm(band_times(abs_band, np.abs(u)))
         return np.linalg.norm(r) <= max(tol * np.linalg.norm(f), floor)
 
     u = np.zeros(ndof)
