@@ -40,7 +40,7 @@ def main():
     repeat = 1 if opts.smoke else 5
     track = load_track()  # first read imports the CSV reader
     t_read = best_time(load_track, repeat)
-    curves = track.supports.left + track.supports.right
+    curves = (*track.supports.left, *track.supports.right)
     baseline = curves[:100] if opts.smoke else curves  # smoke: 100 curves, scaled up
     print(f"read CSVs [s] {t_read:.3f} ({len(curves)} curves)")
     print(f"{'method':<8}{'linearise new ms':>18}{'per-curve loop ms':>19}{'ratio':>7}")

@@ -115,6 +115,12 @@ def test_bad_geometry(tmp_path, text, match):
             "0.9,right,90\n",
             "line 3: sleeper positions of the left rail are not increasing",
         ),
+        (  # the first bad curve of many is named, with its lines
+            "distance_m,rail,load_kN,deflection_mm\n0.3,left,0,0\n0.3,left,9,1\n"
+            "0.3,right,0,0\n0.3,right,9,1\n0.9,left,0,0\n0.9,left,9,1\n"
+            "0.9,right,0,0\n0.9,right,5,1\n0.9,right,9,0.5\n",
+            r"right rail at 0.9 m \(lines 8-10\): load-deflection curve is not monotonic",
+        ),
         ("distance_m,rail,load_lbf,deflection_mm\n0.3,left,0,0\n", "unit 'lbf'"),
         (
             "distance_m,rail,stiffness_kN_per_mm\n0.3,left,80\n0.6,right,90\n",
@@ -132,3 +138,33 @@ def test_bad_supports(tmp_path, text, match):
 def test_missing_file(tmp_path):
     with pytest.raises(TrackdynInputError, match="no such file"):
         read_geometry(tmp_path / "nope.csv")
+
+
+def test_curves_given_on_demand_equal_the_rows_read(tmp_path):
+    text = (
+        "distance_m,rail,load_kN,deflection_mm\n"
+        "0.3, Left,0,0\n0.3,right,0,0\n0.3,left,50,1\n0.3,left,100,1.5\n0.3,right,90,2\n"
+        "0.9,left,0,0\n0.9,left,100,2\n0.9,RIGHT,10,0.5\n0.9,right,80,1\n0.9,right,120,3\n"
+    )
+    path = write(tmp_path, text)
+    s = read_supports(path)
+    expected = {  # rail: (position, load kN, deflection mm, first and last line)
+        "left": [(0.3, [0, 50, 100], [0, 1, 1.5], 2, 5), (0.9, [0, 100], [0, 2], 7, 8)],
+        "right": [(0.3, [0, 90], [0, 2], 3, 6), (0.9, [10, 80, 120], [0.5, 1, 3], 9, 11)],
+    }
+    for rail, rows in expected.items():
+        curves = getattr(s, rail)
+        assert len(curves) == len(rows) == len(list(curves))
+        for curve, (pos, load, defl, first, last) in zip(curves, rows, strict=True):
+            np.testing.assert_allclose(curve.load, np.array(load) * 1e3)
+            np.testing.assert_allclose(curve.deflection, np.array(defl) * 1e-3)
+            assert curve.where == f"{path}: {rail} rail at {pos:g} m (lines {first}-{last})"
+        assert curves[-1].where == curves[len(rows) - 1].where
+        with pytest.raises(IndexError):
+            curves[len(rows)]
+    again = Supports(s.position, tuple(s.left), list(s.right))  # from SupportCurve objects
+    for rail in ("left", "right"):
+        for a, b in zip(getattr(again, rail), getattr(s, rail), strict=True):
+            np.testing.assert_array_equal(a.load, b.load)
+            np.testing.assert_array_equal(a.deflection, b.deflection)
+            assert a.where == b.where

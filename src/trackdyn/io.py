@@ -8,6 +8,7 @@ or linear supports: ``distance_m,rail,stiffness_kN_per_mm``. ``rail`` is ``left`
 
 from __future__ import annotations
 
+import functools
 import os
 import tomllib
 from pathlib import Path
@@ -16,7 +17,7 @@ import numpy as np
 import pandas as pd
 
 from trackdyn.errors import TrackdynInputError, check_series
-from trackdyn.track.support import SupportCurve
+from trackdyn.track.support import Curves
 from trackdyn.track.track import RAILS, Geometry, Supports
 
 UNITS = {
@@ -26,12 +27,12 @@ UNITS = {
 }
 
 
-def _read_csv(path) -> pd.DataFrame:
+def _read_csv(path, **options) -> pd.DataFrame:
     path = Path(path)
     if not path.is_file():
         raise TrackdynInputError(f"{path}: no such file")
     try:
-        return pd.read_csv(path, comment="#", skipinitialspace=True)
+        return pd.read_csv(path, comment="#", skipinitialspace=True, **options)
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
         raise TrackdynInputError(f"{path}: not a readable CSV file ({exc})") from None
 
@@ -95,12 +96,13 @@ def _file_rows(message: str) -> str:
 
 def read_supports(path) -> Supports:
     """Read a supports CSV: load-deflection curves or linear stiffness per sleeper and rail."""
-    frame = _read_csv(path)
+    frame = _read_csv(path, dtype={"rail": "category"})  # a few names, not a string a row
     if "rail" not in frame.columns:
         raise TrackdynInputError(f"{path}: no column 'rail' (left or right)")
     distance, _ = column(frame, "distance", "length", path)
-    rails = frame["rail"].astype(str).str.strip().str.lower().to_numpy()
-    bad = np.flatnonzero(~np.isin(rails, RAILS))
+    names = frame["rail"].cat.categories.astype(str).str.strip().str.lower()
+    rails = np.r_[pd.Index(RAILS).get_indexer(names), -1][frame["rail"].cat.codes]  # -1: none
+    bad = np.flatnonzero(rails < 0)
     if bad.size:
         raise TrackdynInputError(
             f"{path}: line {bad[0] + 2}: rail {frame['rail'].iloc[bad[0]]!r} is not left or right"
@@ -112,40 +114,56 @@ def read_supports(path) -> Supports:
         load, _ = column(frame, "load", "force", path)
         defl, _ = column(frame, "deflection", "length", path)
     per_rail = {}
-    for rail in RAILS:
-        rows = np.flatnonzero(rails == rail)
+    for index, rail in enumerate(RAILS):
+        rows = np.flatnonzero(rails == index)
         if rows.size == 0:
             raise TrackdynInputError(f"{path}: no rows for the {rail} rail")
         d = distance[rows]
-        change = np.flatnonzero(np.diff(d) != 0) + 1
-        positions = d[np.r_[0, change]]
+        start = np.r_[0, np.flatnonzero(np.diff(d) != 0) + 1, rows.size]
+        positions = d[start[:-1]]
         bad = np.flatnonzero(np.diff(positions) <= 0)
         if bad.size:
             raise TrackdynInputError(
-                f"{path}: line {rows[change[bad[0]]] + 2}: sleeper positions of the {rail} "
+                f"{path}: line {rows[start[bad[0] + 1]] + 2}: sleeper positions of the {rail} "
                 "rail are not increasing (each sleeper's rows must be together, in order)"
             )
-        groups = np.split(rows, change)
-        curves = []
-        for pos, group in zip(positions, groups, strict=True):
-            where = f"{path}: {rail} rail at {pos:g} m (lines {group[0] + 2}-{group[-1] + 2})"
-            if linear:
-                if group.size != 1:
-                    raise TrackdynInputError(f"{where}: one stiffness per sleeper expected")
-                curves.append(SupportCurve.linear(values[group[0]], where))
-            else:
-                again = np.flatnonzero(load[group][1:] == load[group][0])
-                if again.size:
-                    raise TrackdynInputError(
-                        f"{where}: this sleeper's curve starts again at line "
-                        f"{group[again[0] + 1] + 2} (rows repeated?)"
-                    )
-                curves.append(SupportCurve(load[group], defl[group], where))
-        per_rail[rail] = (positions, curves)
+        lines = rows[start[:-1]] + 2, rows[start[1:] - 1] + 2
+        where = functools.partial(_curve_where, f"{path}: {rail} rail", positions, *lines)
+        if linear:
+            curves = _linear_curves(values[rows], start, where)
+        else:
+            curves = _measured_curves(load[rows], defl[rows], start, rows, where)
+        per_rail[rail] = positions, curves
     pos_l, pos_r = per_rail["left"][0], per_rail["right"][0]
     if pos_l.shape != pos_r.shape or not np.allclose(pos_l, pos_r):
         raise TrackdynInputError(f"{path}: left and right rails list different sleeper positions")
     return Supports(pos_l, per_rail["left"][1], per_rail["right"][1], str(path))
+
+
+def _curve_where(source: str, position, first, last, i: int) -> str:
+    """Where curve ``i`` of a supports file is: its sleeper position [m] and file lines."""
+    return f"{source} at {position[i]:g} m (lines {first[i]}-{last[i]})"
+
+
+def _linear_curves(stiffness, start, where) -> Curves:
+    """Curves of linear supports [N/m] given on one row per sleeper (rows ``start[i]:``)."""
+    many = np.flatnonzero(np.diff(start) != 1)
+    if many.size:
+        raise TrackdynInputError(f"{where(many[0])}: one stiffness per sleeper expected")
+    return Curves.linear(stiffness, where)
+
+
+def _measured_curves(load, deflection, start, rows, where) -> Curves:
+    """Measured curves [N], [m], refusing a sleeper whose rows start again (file ``rows``)."""
+    again = load == np.repeat(load[start[:-1]], np.diff(start))
+    again[start[:-1]] = False
+    if again.any():
+        k = int(np.argmax(again))
+        i = int(np.searchsorted(start, k, side="right")) - 1
+        raise TrackdynInputError(
+            f"{where(i)}: this sleeper's curve starts again at line {rows[k] + 2} (rows repeated?)"
+        )
+    return Curves(load, deflection, start, where)
 
 
 def write_geometry(geometry: Geometry, path) -> None:
@@ -164,17 +182,17 @@ def write_supports(supports: Supports, path) -> None:
     """Write a supports CSV as a long table ``distance_m,rail,load_kN,deflection_mm``."""
     rows = []
     for rail in RAILS:
-        for pos, curve in zip(supports.position, getattr(supports, rail), strict=True):
-            rows.append(
-                pd.DataFrame(
-                    {
-                        "distance_m": pos,
-                        "rail": rail,
-                        "load_kN": curve.load / 1e3,
-                        "deflection_mm": curve.deflection * 1e3,
-                    }
-                )
+        curves = getattr(supports, rail)
+        rows.append(
+            pd.DataFrame(
+                {
+                    "distance_m": np.repeat(supports.position, np.diff(curves.start)),
+                    "rail": rail,
+                    "load_kN": curves.load / 1e3,
+                    "deflection_mm": curves.deflection * 1e3,
+                }
             )
+        )
     frame = pd.concat(rows, ignore_index=True)
     atomic_write(path, lambda tmp: frame.to_csv(tmp, index=False, float_format="%.6g"))
 

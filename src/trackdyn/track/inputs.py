@@ -153,7 +153,7 @@ class ContactInput:
                     f"2dof-wedge, full); {model.name} uses the bogie approximation and the "
                     "linearised track"
                 )
-            top = max(c.deflection[-1] for r in RAILS for c in getattr(lin.track.supports, r))
+            top = max(getattr(lin.track.supports, r).deflection.max() for r in RAILS)
             self.grid = np.linspace(0.0, 1.5 * top, TABLE_POINTS)
             self.surface = {r: load_surface(lin.track, r, self.grid) for r in set(self.rails)}
 

@@ -13,6 +13,8 @@ spatially varying track stiffness. PhD thesis, University of Pretoria.
 
 from __future__ import annotations
 
+import operator
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -48,25 +50,14 @@ class SupportCurve:
         defl = np.asarray(self.deflection, dtype=float)
         object.__setattr__(self, "load", load)
         object.__setattr__(self, "deflection", defl)
-        if load.ndim != 1 or load.shape != defl.shape or load.size < 2:
+        if load.ndim != 1 or load.shape != defl.shape:
             raise TrackdynInputError(f"{self.where}: needs at least two (load, deflection) points")
-        # ndarray methods, not np.all/np.diff: thousands of curves are checked on reading
-        if not (np.isfinite(load).all() and np.isfinite(defl).all()):
-            raise TrackdynInputError(f"{self.where}: NaN or infinite load or deflection")
-        if load[0] < 0:
-            raise TrackdynInputError(f"{self.where}: negative load {load[0]:g} N")
-        if (load[1:] <= load[:-1]).any() or (defl[1:] <= defl[:-1]).any():
-            raise TrackdynInputError(
-                f"{self.where}: load-deflection curve is not monotonic "
-                "(load and deflection must both increase; zero or negative stiffness)"
-            )
+        check_curves(load, defl, np.array([0, load.size]), lambda _: self.where)
 
     @classmethod
     def linear(cls, stiffness: float, where: str = "linear support") -> SupportCurve:
         """A linear support of the given stiffness [N/m], from zero load up to 2 MN."""
-        check_within(stiffness, *SUPPORT_STIFFNESS, f"{where}: stiffness", "kN/mm", 1e6)
-        load = np.array([0.0, LINEAR_CURVE_MAX_LOAD])
-        return cls(load, load / stiffness, where)
+        return Curves.linear([stiffness], lambda _: where)[0]
 
     def deflection_at(self, load, *, method: str = "cubic", extrapolate: bool = False):
         """Deflection [m] at the given wheel load(s) [N] by cubic interpolation.
@@ -86,7 +77,7 @@ class SupportCurve:
         p = np.asarray(load, dtype=float)
         if not extrapolate:
             self.check_covers(p)
-        return CurveStack((self,)).deflection_at(p.reshape(1, -1), method).reshape(p.shape)
+        return Curves.of((self,)).deflection_at(p.reshape(1, -1), method).reshape(p.shape)
 
     def check_covers(self, load: np.ndarray) -> None:
         """Refuse wheel loads [N] outside the measured curve."""
@@ -100,34 +91,126 @@ class SupportCurve:
             )
 
 
-class CurveStack:
-    """Support curves stacked by number of points, to interpolate all in one array pass.
+def check_curves(load: np.ndarray, deflection: np.ndarray, start: np.ndarray, where) -> None:
+    """Refuse the first curve, in order, that is short, not finite, negative or not monotonic.
 
     Parameters
     ----------
-    curves : sequence of SupportCurve
-        The curves, in the order of the rows of every result.
+    load, deflection : ndarray
+        Points of all curves, one curve after another [N], [m].
+    start : ndarray
+        Index of each curve's first point, then the total number of points.
+    where : callable
+        ``where(i)``: where curve ``i`` came from, for the message.
+    """
+    sizes = np.diff(start)
+    curve = np.repeat(np.arange(sizes.size), sizes)  # curve of each point
+    first = start[:-1]
+    negative = np.zeros(sizes.size, dtype=bool)
+    negative[sizes > 0] = load[first[sizes > 0]] < 0
+    finite = np.isfinite(load) & np.isfinite(deflection)
+    step = (load[1:] > load[:-1]) & (deflection[1:] > deflection[:-1])
+    across = start[1:-1] - 1  # from one curve's last point to the next curve's first
+    step[across[(across >= 0) & (across < step.size)]] = True
+    checks = (
+        (sizes < 2, lambda i: "needs at least two (load, deflection) points"),
+        (
+            np.bincount(curve[~finite], minlength=sizes.size) > 0,
+            lambda i: "NaN or infinite load or deflection",
+        ),
+        (negative, lambda i: f"negative load {load[first[i]]:g} N"),
+        (
+            np.bincount(curve[:-1][~step], minlength=sizes.size) > 0,
+            lambda i: (
+                "load-deflection curve is not monotonic "
+                "(load and deflection must both increase; zero or negative stiffness)"
+            ),
+        ),
+    )
+    bad = np.zeros(sizes.size, dtype=bool)
+    for flags, _ in checks:
+        bad |= flags
+    if bad.any():
+        i = int(np.argmax(bad))
+        message = next(text(i) for flags, text in checks if flags[i])
+        raise TrackdynInputError(f"{where(i)}: {message}")
 
-    Attributes
+
+class Curves(Sequence):
+    """Support curves packed one after another in flat arrays, checked on construction.
+
+    Holds a track's thousands of curves in a few arrays (16 bytes a point, 8 a curve) and
+    interpolates them all in one array pass per number of points; indexing gives a
+    `SupportCurve`, made when asked for.
+
+    Parameters
     ----------
-    groups : list of tuple
-        ``(rows, load, deflection)`` per number of points: the curves' indices and their
-        loads [N] and deflections [m] as 2-D arrays, a row a curve.
-    lo, hi : ndarray
-        First and last measured load of each curve [N].
+    load, deflection : ndarray
+        Points of all curves, one curve after another [N], [m].
+    start : ndarray
+        Index of each curve's first point, then the total number of points.
+    where : callable
+        ``where(i)``: where curve ``i`` came from (file, rail, position, lines), for
+        messages; picklable (a bound method or `functools.partial`) for parallel runs.
     """
 
-    def __init__(self, curves):
-        self.curves = tuple(curves)
-        sizes = np.fromiter((c.load.size for c in self.curves), int, len(self.curves))
-        self.groups = []
-        self.lo, self.hi = np.empty(sizes.size), np.empty(sizes.size)
-        for n in np.unique(sizes):
-            rows = np.flatnonzero(sizes == n)
-            load = np.array([self.curves[i].load for i in rows])
-            defl = np.array([self.curves[i].deflection for i in rows])
-            self.groups.append((rows, load, defl))
-            self.lo[rows], self.hi[rows] = load[:, 0], load[:, -1]
+    def __init__(self, load, deflection, start, where):
+        self.load = np.asarray(load, dtype=float)
+        self.deflection = np.asarray(deflection, dtype=float)
+        self.start = np.asarray(start, dtype=np.intp)
+        self.where = where
+        check_curves(self.load, self.deflection, self.start, where)
+
+    @classmethod
+    def of(cls, curves) -> Curves:
+        """Pack a sequence of `SupportCurve` (a `Curves` is returned as it is)."""
+        if isinstance(curves, Curves):
+            return curves
+        curves = tuple(curves)
+        sizes = [c.load.size for c in curves]
+        return cls(
+            np.concatenate([c.load for c in curves]) if curves else np.empty(0),
+            np.concatenate([c.deflection for c in curves]) if curves else np.empty(0),
+            np.r_[0, np.cumsum(sizes, dtype=np.intp)],
+            tuple(c.where for c in curves).__getitem__,
+        )
+
+    @classmethod
+    def linear(cls, stiffness, where) -> Curves:
+        """Linear supports of the given stiffnesses [N/m], from zero load up to 2 MN.
+
+        Parameters
+        ----------
+        stiffness : array_like
+            One stiffness per curve [N/m].
+        where : callable
+            ``where(i)``: where curve ``i`` came from, for messages.
+        """
+        k = np.asarray(stiffness, dtype=float).reshape(-1)
+        bad = ~((k >= SUPPORT_STIFFNESS[0]) & (k <= SUPPORT_STIFFNESS[1]))
+        if bad.any():
+            i = int(np.argmax(bad))
+            check_within(k[i], *SUPPORT_STIFFNESS, f"{where(i)}: stiffness", "kN/mm", 1e6)
+        load = np.tile([0.0, LINEAR_CURVE_MAX_LOAD], k.size)
+        return cls(load, load / np.repeat(k, 2), np.arange(0, 2 * k.size + 1, 2), where)
+
+    def __len__(self) -> int:
+        return self.start.size - 1
+
+    def __getitem__(self, i) -> SupportCurve:
+        i = range(len(self))[operator.index(i)]
+        part = slice(self.start[i], self.start[i + 1])
+        return SupportCurve(self.load[part].copy(), self.deflection[part].copy(), self.where(i))
+
+    @property
+    def lo(self) -> np.ndarray:
+        """First measured load of each curve [N]."""
+        return self.load[self.start[:-1]]
+
+    @property
+    def hi(self) -> np.ndarray:
+        """Last measured load of each curve [N]."""
+        return self.load[self.start[1:] - 1]
 
     def deflection_at(self, load: np.ndarray, method: str = "cubic") -> np.ndarray:
         """Deflection [m] of each curve at its own wheel loads, linear beyond the curve.
@@ -142,7 +225,11 @@ class CurveStack:
         if method not in METHODS:
             raise TrackdynInputError(f"unknown interpolation method {method!r}; use cubic or pchip")
         out = np.empty(load.shape)
-        for rows, x, y in self.groups:
+        sizes = np.diff(self.start)
+        for n in np.unique(sizes):  # curves with n points as 2-D arrays, a row a curve
+            rows = np.flatnonzero(sizes == n)
+            points = self.start[rows, None] + np.arange(n)
+            x, y = self.load[points], self.deflection[points]
             out[rows] = evaluate(x, y, knot_slopes(x, y, method), load[rows])
         return out
 
@@ -166,7 +253,7 @@ def linearise_curves(
 
     Parameters
     ----------
-    curves : sequence of SupportCurve
+    curves : Curves or sequence of SupportCurve
         Measured curves, one per sleeper.
     static_load : float
         Static wheel load Ps [N].
@@ -191,15 +278,15 @@ def linearise_curves(
         raise TrackdynInputError(f"static wheel load must be > 0, got {float(static_load):g} N")
     if not np.isfinite(delta) or not 0 < delta < 1:
         raise TrackdynInputError(f"dynamic increment delta must be in (0, 1), got {float(delta):g}")
-    stack = CurveStack(curves)
+    stack = Curves.of(curves)
     dp = delta * static_load
     p = np.array([static_load - dp, static_load + dp])
-    ys1, ys2 = stack.deflection_at(np.broadcast_to(p, (len(stack.curves), 2)), method).T
+    ys1, ys2 = stack.deflection_at(np.broadcast_to(p, (len(stack), 2)), method).T
     bad = ys2 <= ys1
     if not extrapolate:
         bad |= (p[0] < stack.lo) | (p[1] > stack.hi)
     if np.any(bad):
-        curve = stack.curves[np.argmax(bad)]
+        curve = stack[int(np.argmax(bad))]
         if not extrapolate:
             curve.check_covers(p)
         raise TrackdynInputError(

@@ -16,7 +16,7 @@ from scipy.interpolate import CubicSpline
 
 from trackdyn.errors import TrackdynInputError, check_series
 from trackdyn.limits import MAX_PROFILE, SUPPORT_STIFFNESS, check_within
-from trackdyn.track.support import CurveStack, SupportCurve, linearise_curves
+from trackdyn.track.support import Curves, linearise_curves
 from trackdyn.track.winkler import modulus_from_stiffness
 
 RAILS = ("left", "right")
@@ -78,22 +78,23 @@ class Supports:
     ----------
     position : ndarray
         Sleeper positions along the track, strictly increasing [m].
-    left, right : tuple of SupportCurve
-        One curve per sleeper for each rail.
+    left, right : Curves or sequence of SupportCurve
+        One curve per sleeper for each rail, kept packed as `Curves`; ``supports.left[i]``
+        is the left rail's curve at sleeper ``i``, a `SupportCurve`.
     where : str
         Source name for error messages.
     """
 
     position: np.ndarray
-    left: tuple[SupportCurve, ...]
-    right: tuple[SupportCurve, ...]
+    left: Curves
+    right: Curves
     where: str = "supports"
 
     def __post_init__(self):
         pos = check_series(self.position, min_points=2, where=self.where)
         object.__setattr__(self, "position", pos)
         for rail in RAILS:
-            curves = tuple(getattr(self, rail))
+            curves = Curves.of(getattr(self, rail))
             if len(curves) != pos.size:
                 raise TrackdynInputError(
                     f"{self.where}: {len(curves)} {rail}-rail curves for {pos.size} sleepers"
@@ -104,14 +105,13 @@ class Supports:
     def linear(cls, position, left_stiffness, right_stiffness, where="supports"):
         """Linear supports: one stiffness per sleeper and rail [N/m] (scalars broadcast)."""
         pos = np.asarray(position, dtype=float)
-        curves = {}
-        for rail, k in (("left", left_stiffness), ("right", right_stiffness)):
-            k = np.broadcast_to(np.asarray(k, dtype=float), pos.shape)
-            curves[rail] = tuple(
-                SupportCurve.linear(float(ki), f"{where}: {rail} rail, sleeper {i}")
-                for i, ki in enumerate(k)
+        curves = [
+            Curves.linear(
+                np.broadcast_to(k, pos.shape), f"{where}: {rail} rail, sleeper {{}}".format
             )
-        return cls(pos, curves["left"], curves["right"], where)
+            for rail, k in zip(RAILS, (left_stiffness, right_stiffness), strict=True)
+        ]
+        return cls(pos, *curves, where)
 
 
 @dataclass(frozen=True)
@@ -148,14 +148,16 @@ class Track:
         **options
             Passed to `linearise_curves` (``method``, ``extrapolate``, ``printed_5_10``).
         """
-        curves = self.supports.left + self.supports.right
-        k2, ys = linearise_curves(curves, static_load, delta, **options)
-        bad = (k2 < SUPPORT_STIFFNESS[0]) | (k2 > SUPPORT_STIFFNESS[1])
-        if bad.any():
-            i = int(np.argmax(bad))
-            check_within(k2[i], *SUPPORT_STIFFNESS, f"{curves[i].where}: k2", "kN/mm", 1e6)
-        shape = (len(RAILS), self.supports.position.size)
-        return LinearisedTrack(self, static_load, delta, k2.reshape(shape), ys.reshape(shape))
+        rails = [getattr(self.supports, rail) for rail in RAILS]
+        k2, ys = np.array(
+            [linearise_curves(c, static_load, delta, **options) for c in rails]
+        ).transpose(1, 0, 2)
+        for curves, k in zip(rails, k2, strict=True):
+            bad = (k < SUPPORT_STIFFNESS[0]) | (k > SUPPORT_STIFFNESS[1])
+            if bad.any():
+                i = int(np.argmax(bad))
+                check_within(k[i], *SUPPORT_STIFFNESS, f"{curves.where(i)}: k2", "kN/mm", 1e6)
+        return LinearisedTrack(self, static_load, delta, k2, ys)
 
 
 @dataclass(frozen=True)
@@ -239,7 +241,7 @@ def load_surface(track: Track, rail: str, deflection_grid: np.ndarray):
     """
     from scipy.interpolate import RectBivariateSpline
 
-    stack = CurveStack(getattr(track.supports, rail))
+    stack = getattr(track.supports, rail)
     p = np.linspace(stack.lo, stack.hi, 200, axis=1)
     y = stack.deflection_at(p, method="pchip")
     loads = np.array(
