@@ -168,21 +168,25 @@ def track(
 
     Without --geometry and --supports, the built-in 1 km example section is used.
     """
-    from trackdyn.data import load_track
+    from trackdyn.data import EXAMPLE_GEOMETRY, EXAMPLE_SUPPORTS, example_path
     from trackdyn.errors import require_positive
     from trackdyn.track.rails import rail_section
     from trackdyn.track.report import write_track_outputs
+    from trackdyn.track.sections import analyse_sections
 
     require_positive("--wheel-load-kN", wheel_load_kN)
     if (geometry is None) != (supports is None):
         raise TrackdynInputError("give both --geometry and --supports, or neither for the example")
+    if geometry is None:
+        geometry, supports = example_path(EXAMPLE_GEOMETRY), example_path(EXAMPLE_SUPPORTS)
     section = rail_section(rail)
     with output_folder(out, "track", overwrite) as stage:
-        with console.status("reading and linearising the track"):
-            trk = load_track(geometry, supports)
-            lin = trk.linearise(wheel_load_kN * 1e3, delta, extrapolate=extrapolate)
-        table = write_track_outputs(lin, section, stage)
-    _show(table, f"Track summary ({trk.geometry.where})")
+        with console.status("reading and linearising the track, section by section"):
+            ds, lin, basin = analyse_sections(
+                geometry, supports, wheel_load_kN * 1e3, delta, section, extrapolate=extrapolate
+            )
+        table = write_track_outputs(ds, lin, basin, stage)
+    _show(table, f"Track summary ({ds.attrs['geometry_source']})")
     console.print(f"wrote track.nc and 3 figures to {out}")
 
 

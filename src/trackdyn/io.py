@@ -11,6 +11,8 @@ from __future__ import annotations
 import functools
 import os
 import tomllib
+from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -27,14 +29,32 @@ UNITS = {
 }
 
 
+CHUNK_ROWS = 100_000
+"""Rows of a CSV parsed at a time by the chunked readers (`geometry_pieces`, `support_pieces`)."""
+
+_UNREADABLE = (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError)
+
+
 def _read_csv(path, **options) -> pd.DataFrame:
     path = Path(path)
     if not path.is_file():
         raise TrackdynInputError(f"{path}: no such file")
     try:
         return pd.read_csv(path, comment="#", skipinitialspace=True, **options)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
+    except _UNREADABLE as exc:
         raise TrackdynInputError(f"{path}: not a readable CSV file ({exc})") from None
+
+
+def _read_chunks(path, rows: int, **options) -> Iterator[pd.DataFrame]:
+    """The CSV ``rows`` data rows at a time; each frame's index counts data rows from 0."""
+    with _read_csv(path, chunksize=rows, **options) as reader:
+        while True:
+            try:
+                yield next(reader)
+            except StopIteration:
+                return
+            except _UNREADABLE as exc:
+                raise TrackdynInputError(f"{path}: not a readable CSV file ({exc})") from None
 
 
 def column(frame: pd.DataFrame, quantity: str, kind: str, where) -> tuple[np.ndarray, str]:
@@ -67,77 +87,179 @@ def column(frame: pd.DataFrame, quantity: str, kind: str, where) -> tuple[np.nda
     bad = np.flatnonzero(~np.isfinite(values))
     if bad.size:
         raise TrackdynInputError(
-            f"{where}: column {name!r} is empty, NaN, infinite or not a number at line {bad[0] + 2}"
+            f"{where}: column {name!r} is empty, NaN, infinite or not a number "
+            f"at line {frame.index[bad[0]] + 2}"
         )
     return values * UNITS[kind][unit], name
 
 
 def read_geometry(path) -> Geometry:
     """Read a geometry CSV (``distance_m,left_mm,right_mm``) into SI units."""
-    frame = _read_csv(path)
+    return _geometry(_read_csv(path), path)
+
+
+def geometry_pieces(path, rows: int = CHUNK_ROWS) -> Iterator[tuple[np.ndarray, ...]]:
+    """A geometry CSV read ``rows`` rows at a time, checked as `read_geometry` checks it.
+
+    Yields
+    ------
+    distance, left, right : ndarray
+        The piece's rows in SI units [m]; each piece is checked together with the last row
+        of the one before, so the distance must increase across pieces too.
+    """
+    last = None
+    for frame in _read_chunks(path, rows):
+        piece = _geometry(frame if last is None else pd.concat([last, frame]), path)
+        skip = 0 if last is None else 1
+        yield piece.distance[skip:], piece.left[skip:], piece.right[skip:]
+        last = frame.iloc[-1:]
+
+
+def _geometry(frame: pd.DataFrame, path) -> Geometry:
+    """Geometry of a table read from ``path``; messages count the rows of the whole file."""
     distance, _ = column(frame, "distance", "length", path)
     try:
         check_series(distance, min_points=2, where=str(path))
     except TrackdynInputError as exc:  # rows in the file count the header line
-        raise TrackdynInputError(_file_rows(str(exc))) from None
+        raise TrackdynInputError(_file_rows(str(exc), frame.index, 2, "line")) from None
     left, _ = column(frame, "left", "length", path)
     right, _ = column(frame, "right", "length", path)
-    return Geometry(distance, left, right, str(path))
+    try:
+        return Geometry(distance, left, right, str(path))
+    except TrackdynInputError as exc:
+        raise TrackdynInputError(_file_rows(str(exc), frame.index, 0, "row")) from None
 
 
-def _file_rows(message: str) -> str:
-    """Rewrite "row i" (0-based data index) as the file's line number (header is line 1)."""
+def _file_rows(message: str, index, first: int, word: str) -> str:
+    """Rewrite "row i" (index in ``frame``) as the file's data row or line (header line 1).
+
+    Parameters
+    ----------
+    message : str
+        Message naming "at row i", i counted from 0 in the table checked.
+    index : pandas.Index
+        The table's index: data rows of the file, counted from 0.
+    first : int
+        Number given to the file's first data row.
+    word : str
+        ``"line"`` or ``"row"``.
+    """
     head, sep, tail = message.partition(" at row ")
     if not sep:
         return message
     num, _, rest = tail.partition(" ")
-    return f"{head} at line {int(num) + 2}{(' ' + rest) if rest else ''}"
+    return f"{head} at {word} {index[int(num)] + first}{(' ' + rest) if rest else ''}"
+
+
+@dataclass(frozen=True)
+class SupportRows:
+    """Rows of a supports CSV in SI units, checked row by row.
+
+    Parameters
+    ----------
+    distance : ndarray
+        Sleeper position of each row [m].
+    rail : ndarray
+        Index of the row's rail in `RAILS`.
+    values : tuple of ndarray
+        Stiffness [N/m] (linear supports), or load [N] and deflection [m].
+    line : ndarray
+        Line of each row in the file (the header is line 1).
+    """
+
+    distance: np.ndarray
+    rail: np.ndarray
+    values: tuple
+    line: np.ndarray
+
+    def take(self, rows) -> SupportRows:
+        """The rows selected by ``rows`` (an index array, mask or slice)."""
+        return SupportRows(
+            self.distance[rows],
+            self.rail[rows],
+            tuple(v[rows] for v in self.values),
+            self.line[rows],
+        )
+
+    @staticmethod
+    def concat(parts) -> SupportRows:
+        """Rows of ``parts`` (a non-empty sequence of `SupportRows`) one after another."""
+        return SupportRows(
+            np.concatenate([p.distance for p in parts]),
+            np.concatenate([p.rail for p in parts]),
+            tuple(np.concatenate(v) for v in zip(*(p.values for p in parts), strict=True)),
+            np.concatenate([p.line for p in parts]),
+        )
 
 
 def read_supports(path) -> Supports:
     """Read a supports CSV: load-deflection curves or linear stiffness per sleeper and rail."""
-    frame = _read_csv(path, dtype={"rail": "category"})  # a few names, not a string a row
+    rows = _support_rows(_read_csv(path, dtype={"rail": "category"}), path)
+    return supports_of([rail_rows(rows, rail) for rail in RAILS], path)
+
+
+def support_pieces(path, rows: int = CHUNK_ROWS) -> Iterator[SupportRows]:
+    """A supports CSV read ``rows`` rows at a time, each row checked as `read_supports` does."""
+    for frame in _read_chunks(path, rows, dtype={"rail": "category"}):
+        yield _support_rows(frame, path)
+
+
+def rail_rows(rows: SupportRows, rail: str) -> SupportRows:
+    """The rows of one rail (``"left"`` or ``"right"``)."""
+    return rows.take(rows.rail == RAILS.index(rail))
+
+
+def _support_rows(frame: pd.DataFrame, path) -> SupportRows:
+    """Check and convert the rows of a supports table (rail names, numbers, units)."""
     if "rail" not in frame.columns:
         raise TrackdynInputError(f"{path}: no column 'rail' (left or right)")
     distance, _ = column(frame, "distance", "length", path)
     names = frame["rail"].cat.categories.astype(str).str.strip().str.lower()
     rails = np.r_[pd.Index(RAILS).get_indexer(names), -1][frame["rail"].cat.codes]  # -1: none
+    line = frame.index.to_numpy() + 2
     bad = np.flatnonzero(rails < 0)
     if bad.size:
         raise TrackdynInputError(
-            f"{path}: line {bad[0] + 2}: rail {frame['rail'].iloc[bad[0]]!r} is not left or right"
+            f"{path}: line {line[bad[0]]}: rail {frame['rail'].iloc[bad[0]]!r} is not left or right"
         )
-    linear = any(str(c).startswith("stiffness_") for c in frame.columns)
-    if linear:
-        values, _ = column(frame, "stiffness", "stiffness", path)
+    if any(str(c).startswith("stiffness_") for c in frame.columns):
+        values = (column(frame, "stiffness", "stiffness", path)[0],)
     else:
-        load, _ = column(frame, "load", "force", path)
-        defl, _ = column(frame, "deflection", "length", path)
-    per_rail = {}
-    for index, rail in enumerate(RAILS):
-        rows = np.flatnonzero(rails == index)
-        if rows.size == 0:
-            raise TrackdynInputError(f"{path}: no rows for the {rail} rail")
-        d = distance[rows]
-        start = np.r_[0, np.flatnonzero(np.diff(d) != 0) + 1, rows.size]
-        positions = d[start[:-1]]
-        bad = np.flatnonzero(np.diff(positions) <= 0)
-        if bad.size:
-            raise TrackdynInputError(
-                f"{path}: line {rows[start[bad[0] + 1]] + 2}: sleeper positions of the {rail} "
-                "rail are not increasing (each sleeper's rows must be together, in order)"
-            )
-        lines = rows[start[:-1]] + 2, rows[start[1:] - 1] + 2
-        where = functools.partial(_curve_where, f"{path}: {rail} rail", positions, *lines)
-        if linear:
-            curves = _linear_curves(values[rows], start, where)
-        else:
-            curves = _measured_curves(load[rows], defl[rows], start, rows, where)
-        per_rail[rail] = positions, curves
-    pos_l, pos_r = per_rail["left"][0], per_rail["right"][0]
+        values = tuple(
+            column(frame, q, kind, path)[0]
+            for q, kind in (("load", "force"), ("deflection", "length"))
+        )
+    return SupportRows(distance, rails.astype(np.int8), values, line)
+
+
+def supports_of(per_rail, path) -> Supports:
+    """Supports from the rows of the left and the right rail (`SupportRows` each)."""
+    (pos_l, left), (pos_r, right) = (
+        rail_curves(rows, rail, path) for rows, rail in zip(per_rail, RAILS, strict=True)
+    )
     if pos_l.shape != pos_r.shape or not np.allclose(pos_l, pos_r):
         raise TrackdynInputError(f"{path}: left and right rails list different sleeper positions")
-    return Supports(pos_l, per_rail["left"][1], per_rail["right"][1], str(path))
+    return Supports(pos_l, left, right, str(path))
+
+
+def rail_curves(rows: SupportRows, rail: str, path) -> tuple[np.ndarray, Curves]:
+    """Sleeper positions [m] and curves of one rail's rows, in file order."""
+    if rows.distance.size == 0:
+        raise TrackdynInputError(f"{path}: no rows for the {rail} rail")
+    d = rows.distance
+    start = np.r_[0, np.flatnonzero(np.diff(d) != 0) + 1, d.size]
+    positions = d[start[:-1]]
+    bad = np.flatnonzero(np.diff(positions) <= 0)
+    if bad.size:
+        raise TrackdynInputError(
+            f"{path}: line {rows.line[start[bad[0] + 1]]}: sleeper positions of the {rail} "
+            "rail are not increasing (each sleeper's rows must be together, in order)"
+        )
+    lines = rows.line[start[:-1]], rows.line[start[1:] - 1]
+    where = functools.partial(_curve_where, f"{path}: {rail} rail", positions, *lines)
+    if len(rows.values) == 1:
+        return positions, _linear_curves(rows.values[0], start, where)
+    return positions, _measured_curves(*rows.values, start, rows.line, where)
 
 
 def _curve_where(source: str, position, first, last, i: int) -> str:
@@ -153,15 +275,15 @@ def _linear_curves(stiffness, start, where) -> Curves:
     return Curves.linear(stiffness, where)
 
 
-def _measured_curves(load, deflection, start, rows, where) -> Curves:
-    """Measured curves [N], [m], refusing a sleeper whose rows start again (file ``rows``)."""
+def _measured_curves(load, deflection, start, lines, where) -> Curves:
+    """Measured curves [N], [m], refusing a sleeper whose rows start again (file ``lines``)."""
     again = load == np.repeat(load[start[:-1]], np.diff(start))
     again[start[:-1]] = False
     if again.any():
         k = int(np.argmax(again))
         i = int(np.searchsorted(start, k, side="right")) - 1
         raise TrackdynInputError(
-            f"{where(i)}: this sleeper's curve starts again at line {rows[k] + 2} (rows repeated?)"
+            f"{where(i)}: this sleeper's curve starts again at line {lines[k]} (rows repeated?)"
         )
     return Curves(load, deflection, start, where)
 

@@ -34,21 +34,13 @@ def track_overview(ds, path) -> None:
     fig, axes = plt.subplots(4, 1, figsize=(11, 10), sharex=True)
     for rail in ds.rail.values:
         c = RAIL_COLOURS[str(rail)]
-        axes[0].plot(
-            ds.distance,
-            ds.unloaded_profile.sel(rail=rail) * 1e3,
-            color=c,
-            lw=0.7,
-            label=f"{rail} unloaded",
-        )
-        axes[1].plot(
-            ds.distance,
-            ds.loaded_profile.sel(rail=rail) * 1e3,
-            color=c,
-            lw=0.7,
-            label=f"{rail} loaded",
-        )
-        axes[2].plot(ds.sleeper_distance, ds.k2.sel(rail=rail) / 1e6, color=c, lw=0.7, label=rail)
+        for ax, name in ((axes[0], "unloaded"), (axes[1], "loaded")):  # long tracks thinned
+            profile = ds[f"{name}_profile"].sel(rail=rail).values * 1e3
+            ax.plot(
+                *_envelope(ds.distance.values, profile), color=c, lw=0.7, label=f"{rail} {name}"
+            )
+        k2 = ds.k2.sel(rail=rail).values / 1e6
+        axes[2].plot(*_envelope(ds.sleeper_distance.values, k2), color=c, lw=0.7, label=rail)
     sd = ds.sd_unloaded.sel(band="D1")
     for rail in sd.rail.values:
         axes[3].hlines(

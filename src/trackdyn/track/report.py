@@ -23,10 +23,12 @@ from trackdyn.track.track import RAILS, LinearisedTrack
 from trackdyn.units import GRAVITY
 
 QUALITY_BANDS = ("D1", "D2")
+SEGMENT_M = 200.0
+"""Length of the quality segments [m]."""
 
 
 def quality_table(
-    distance, profiles: dict, segment_length: float = 200.0, where: str = ""
+    distance, profiles: dict, segment_length: float = SEGMENT_M, where: str = "", first: int = 0
 ) -> xr.DataArray:
     """Standard deviation of longitudinal level per band, rail and segment [mm].
 
@@ -40,16 +42,15 @@ def quality_table(
         Segment length for the standard deviation [m].
     where : str
         Source of the profiles (a file) named in error messages.
+    first : int
+        Index of the sample where the first segment starts; the filters see all samples.
     """
     values, segments = [], None
     for band in QUALITY_BANDS:
         per_rail = []
         for rail in profiles:
-            table = segment_sd(
-                distance,
-                longitudinal_level(distance, profiles[rail], band, where=where),
-                segment_length,
-            )
+            level = longitudinal_level(distance, profiles[rail], band, where=where)
+            table = segment_sd(distance[first:], level[first:], segment_length)
             per_rail.append(table["sd_mm"].to_numpy())
             segments = table
         values.append(per_rail)
@@ -66,13 +67,16 @@ def quality_table(
     )
 
 
-def track_dataset(lin: LinearisedTrack) -> xr.Dataset:
+def track_dataset(lin: LinearisedTrack, keep=(-np.inf, np.inf)) -> xr.Dataset:
     """Profiles, linearised stiffness and geometry quality of a linearised track.
 
     Parameters
     ----------
     lin : LinearisedTrack
         Track linearised about the static wheel load.
+    keep : tuple of float
+        Keep the profile samples, sleepers and quality segments that start in ``[lo, hi)``
+        [m], a section of a longer track; the quality filters see the whole of ``lin``.
 
     Returns
     -------
@@ -88,35 +92,41 @@ def track_dataset(lin: LinearisedTrack) -> xr.Dataset:
     x = g.distance[inside]
     unloaded = {r: g.profile(r)[inside] for r in RAILS}
     loaded = {r: lin.loaded_profile(r)[inside] for r in RAILS}
+    bounds = np.asarray(keep) - 1e-9 * SEGMENT_M  # as segment_sd's tolerance
+    a, b = np.searchsorted(x, bounds)
+    sleepers = slice(*np.searchsorted(pos, bounds))
+    sd = {}
+    for name, profiles in (("sd_unloaded", unloaded), ("sd_loaded", loaded)):
+        table = quality_table(x, profiles, where=g.where, first=a)
+        sd[name] = table.isel(segment=table.segment_start.values < bounds[1])
     ds = xr.Dataset(
         {
             "unloaded_profile": (
                 ("rail", "distance"),
-                np.array([unloaded[r] for r in RAILS]),
+                np.array([unloaded[r][a:b] for r in RAILS]),
                 {"units": "m", "long_name": "unloaded vertical space curve", "positive": "down"},
             ),
             "loaded_profile": (
                 ("rail", "distance"),
-                np.array([loaded[r] for r in RAILS]),
+                np.array([loaded[r][a:b] for r in RAILS]),
                 {"units": "m", "long_name": "loaded profile (unloaded + ys)", "positive": "down"},
             ),
             "k2": (
                 ("rail", "sleeper"),
-                lin.k2,
+                lin.k2[:, sleepers],
                 {"units": "N/m", "long_name": "effective linearised loaded stiffness (5.10)"},
             ),
             "ys": (
                 ("rail", "sleeper"),
-                lin.ys,
+                lin.ys[:, sleepers],
                 {"units": "m", "long_name": "static track deflection (5.11)"},
             ),
-            "sd_unloaded": quality_table(x, unloaded, where=g.where),
-            "sd_loaded": quality_table(x, loaded, where=g.where),
+            **sd,
         },
         coords={
             "rail": list(RAILS),
-            "distance": ("distance", x, {"units": "m"}),
-            "sleeper_distance": ("sleeper", pos, {"units": "m"}),
+            "distance": ("distance", x[a:b], {"units": "m"}),
+            "sleeper_distance": ("sleeper", pos[sleepers], {"units": "m"}),
         },
         attrs={
             "static_wheel_load_N": lin.static_load,
@@ -154,23 +164,24 @@ def summary_table(ds: xr.Dataset) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def write_track_outputs(lin: LinearisedTrack, rail_section, folder) -> pd.DataFrame:
+def write_track_outputs(ds: xr.Dataset, lin, basin, folder) -> pd.DataFrame:
     """Write ``track.nc`` and the three track figures into ``folder``; return the summary.
 
     Parameters
     ----------
+    ds : xarray.Dataset
+        Result of `track_dataset` (or of the sections of a long track, joined).
     lin : LinearisedTrack
-        Track linearised about the static wheel load.
-    rail_section : RailSection
-        Rail of the voided-sleeper deflection basin.
+        Track linearised about the static wheel load, or what `plots.load_deflection`
+        reads of it.
+    basin : tuple
+        Result of `voided_basin`.
     folder : Path
         Output folder.
     """
     from trackdyn import plots
     from trackdyn.io import write_netcdf
 
-    ds = track_dataset(lin)
-    basin = voided_basin(lin, rail_section)
     write_netcdf(ds, folder / "track.nc")
     plots.track_overview(ds, folder / "track_overview.png")
     plots.load_deflection(lin, folder / "load_deflection.png")
@@ -178,7 +189,24 @@ def write_track_outputs(lin: LinearisedTrack, rail_section, folder) -> pd.DataFr
     return summary_table(ds)
 
 
-def voided_basin(lin: LinearisedTrack, rail_section, window: float = 12.0):
+def most_voided(lin: LinearisedTrack, sleepers=slice(None)) -> tuple[int, int]:
+    """Rail index and sleeper index of the largest seating gap among ``sleepers``.
+
+    Ties go to the left rail, then to the first sleeper.
+
+    Parameters
+    ----------
+    lin : LinearisedTrack
+        Linearised track.
+    sleepers : slice
+        Sleepers to look at (indices of ``lin``'s sleepers).
+    """
+    gaps = lin.seating_gap()[:, sleepers]
+    r, i = np.unravel_index(np.argmax(gaps), gaps.shape)
+    return int(r), int(i) + range(lin.k2.shape[1])[sleepers].start
+
+
+def voided_basin(lin: LinearisedTrack, rail_section, window: float = 12.0, sleepers=slice(None)):
     """Deflection basin under the static wheel load over the most voided sleeper.
 
     The supports within ``window`` [m] each side become tensionless linear springs with the
@@ -194,6 +222,8 @@ def voided_basin(lin: LinearisedTrack, rail_section, window: float = 12.0):
         Rail section (bending stiffness and mass per metre).
     window : float
         Half length of the modelled rail [m].
+    sleepers : slice
+        Sleepers among which the most voided is sought (`most_voided`).
 
     Returns
     -------
@@ -205,7 +235,7 @@ def voided_basin(lin: LinearisedTrack, rail_section, window: float = 12.0):
         Basins with the wheel, less the rail's own-weight state.
     """
     gaps = lin.seating_gap()
-    r, i = np.unravel_index(np.argmax(gaps), gaps.shape)
+    r, i = most_voided(lin, sleepers)
     pos = lin.track.supports.position
     x0 = pos[i]
     near = np.abs(pos - x0) <= window

@@ -1,0 +1,311 @@
+"""A long track analysed section by section, in memory that does not grow with its length.
+
+`trackdyn track` reads the geometry and supports files a piece at a time (`trackdyn.io`)
+and cuts the track into sections of about `SECTION_M`. Each section holds `MARGIN_M` of
+track each side of its core, so the band-pass filters of the quality bands settle (within
+about one longest wavelength, 70 m for D2) before the core; of each section only the core is
+kept, and the cores joined give what the whole track read at once gives.
+
+Sections are cut only at geometry samples that lie on a quality segment boundary (200 m
+apart from the first sample of the track) and start at such a sample: the segments, and the
+grid on which `trackdyn.track.quality.longitudinal_level` resamples an uneven profile, are
+then those of the whole track. A geometry file with no sample on a segment boundary is read
+as one section.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+
+from trackdyn.io import (
+    CHUNK_ROWS,
+    SupportRows,
+    geometry_pieces,
+    rail_curves,
+    rail_rows,
+    support_pieces,
+    supports_of,
+)
+from trackdyn.track.report import SEGMENT_M, most_voided, track_dataset, voided_basin
+from trackdyn.track.track import RAILS, Geometry, Track
+
+SECTION_M = 10_000.0
+"""Length of a section's core [m], at least; a multiple of the segment length."""
+MARGIN_M = 1000.0
+"""Track read each side of a section's core [m]: D2 segment SD within 2e-8 mm of the whole
+track's on a synthetic profile (2e-6 mm with 700 m, 2e-4 mm with 400 m)."""
+PAD_M = 50.0
+"""Supports read beyond each end of a section's geometry, so sleepers bracket it [m]."""
+_TOL = 1e-9 * SEGMENT_M  # as segment_sd's tolerance [m]
+
+
+@dataclass(frozen=True)
+class Section:
+    """A section of a long track and the part of it that is its own.
+
+    Parameters
+    ----------
+    track : Track
+        The section with its margins.
+    keep : tuple of float
+        Its core, ``[lo, hi)`` [m]; infinite at the ends of the track.
+    """
+
+    track: Track
+    keep: tuple[float, float]
+
+
+class _Rows:
+    """Rows of a file read piece by piece, from the first not yet dropped, in file order."""
+
+    def __init__(self, pieces: Iterator, distance: Callable, take: Callable, concat: Callable):
+        self._pieces, self._distance, self._take, self._concat = pieces, distance, take, concat
+        self.rows, self.done = None, False
+
+    @property
+    def distance(self) -> np.ndarray:
+        return np.empty(0) if self.rows is None else self._distance(self.rows)
+
+    def read(self) -> bool:
+        """Read one more piece; False at the end of the file."""
+        piece = next(self._pieces, None)
+        self.done = piece is None
+        if not self.done:
+            self.rows = piece if self.rows is None else self._concat([self.rows, piece])
+        return not self.done
+
+    def reach(self, x: float) -> bool:
+        """Read until a row lies beyond ``x`` [m]; False if the file ends first."""
+        while not (self.distance.size and self.distance[-1] > x):
+            if not self.read():
+                return False
+        return True
+
+    def up_to(self, x: float):
+        """The rows before the first one beyond ``x`` [m]."""
+        return self._take(self.rows, slice(0, int(np.argmax(np.r_[self.distance > x, True]))))
+
+    def drop_before(self, x: float) -> None:
+        """Drop the rows before the first one at or beyond ``x`` [m]."""
+        d = self.distance
+        self.rows = self._take(self.rows, slice(int(np.argmax(np.r_[d >= x, True])), None))
+
+
+def _geometry_rows(path, rows: int) -> _Rows:
+    return _Rows(
+        geometry_pieces(path, rows),
+        lambda t: t[0],
+        lambda t, s: tuple(a[s] for a in t),
+        lambda parts: tuple(map(np.concatenate, zip(*parts, strict=True))),
+    )
+
+
+def _rail_rows(path, rail: str, rows: int) -> _Rows:
+    pieces = (rail_rows(p, rail) for p in support_pieces(path, rows))
+    return _Rows(pieces, lambda r: r.distance, SupportRows.take, SupportRows.concat)
+
+
+def track_sections(
+    geometry, supports, length: float = SECTION_M, margin: float = MARGIN_M, rows=CHUNK_ROWS
+) -> Iterator[Section]:
+    """The track of a geometry and a supports file, section by section.
+
+    Parameters
+    ----------
+    geometry, supports : path
+        Geometry and supports CSV files (as `trackdyn.data.load_track` reads).
+    length : float
+        Least length of a section's core [m].
+    margin : float
+        Track each side of a core [m].
+    rows : int
+        Rows of a file read at a time.
+
+    Yields
+    ------
+    Section
+        Consecutive sections; their cores cover the track once.
+    """
+    geo = _geometry_rows(geometry, rows)
+    rails = [_rail_rows(supports, rail, rows) for rail in RAILS]
+    x0 = _first_sample(geo, rails[0])
+    lo = -np.inf
+    while True:
+        cut = None if x0 is None else _next_cut(geo, x0, max(lo, x0) + length, margin)
+        end = np.inf if cut is None else cut + margin
+        if not all([r.reach(end + PAD_M) for r in rails]):  # every file read that far
+            cut, end = None, np.inf
+        if cut is None:  # the last section: the rest of both files
+            for r in rails:
+                r.reach(np.inf)
+            last = max((r.distance[-1] for r in rails if r.distance.size), default=np.inf)
+            while geo.read():  # every row is checked; those past the supports are of no use
+                geo.rows = geo.up_to(max(last, geo.distance[0]))
+        part = geo.rows if cut is None else geo.up_to(end)
+        found = [r.rows if cut is None else r.up_to(end + PAD_M) for r in rails]
+        track = Track(Geometry(*part, str(geometry)), supports_of(found, supports))
+        yield Section(track, (lo, np.inf if cut is None else cut))
+        if cut is None:
+            return
+        d = geo.distance
+        start = d[_anchors(d, x0) & (d <= cut - margin)]
+        geo.drop_before(start[-1] if start.size else d[0])
+        for r in rails:
+            r.drop_before(geo.distance[0] - PAD_M)
+        lo = cut
+
+
+def _first_sample(geo: _Rows, left: _Rows) -> float | None:
+    """First geometry sample [m] that the supports cover (None if there is none)."""
+    if not (geo.reach(-np.inf) and left.reach(-np.inf)):
+        return None
+    start = max(geo.distance[0], left.distance[0])
+    if not (geo.reach(start) or geo.distance[-1] >= start):
+        return None
+    d = geo.distance
+    return float(d[np.searchsorted(d, start)])
+
+
+def _anchors(d: np.ndarray, x0: float) -> np.ndarray:
+    """Which samples ``d`` [m] lie on a quality segment boundary."""
+    r = (d - x0) / SEGMENT_M
+    return np.abs(r - np.round(r)) * SEGMENT_M <= _TOL
+
+
+def _next_cut(geo: _Rows, x0: float, target: float, margin: float) -> float | None:
+    """First segment boundary at a sample from ``target`` on with ``margin`` read after it."""
+    while True:
+        d = geo.distance
+        cuts = d[_anchors(d, x0) & (d >= target - _TOL)]
+        if cuts.size and d[-1] > cuts[0] + margin:
+            return float(cuts[0])
+        if not geo.read():
+            return None
+
+
+@dataclass(frozen=True)
+class _Curves:
+    """Curves of one rail looked up by sleeper: those kept, else read again from the file."""
+
+    kept: dict
+    path: object
+    rail: str
+    position: np.ndarray
+
+    def __getitem__(self, i) -> object:
+        if i not in self.kept:
+            self.kept[i] = _read_curve(self.path, self.rail, self.position[i])
+        return self.kept[i]
+
+
+def _read_curve(path, rail: str, position: float):
+    """The curve at ``position`` [m] of ``rail`` in a supports file (`SupportCurve`)."""
+    found = []
+    for piece in support_pieces(path):
+        rows = rail_rows(piece, rail)
+        found.append(rows.take(rows.distance == position))
+        if (rows.distance > position).any():
+            break
+    return rail_curves(SupportRows.concat(found), rail, path)[1][0]
+
+
+@dataclass(frozen=True)
+class _SupportsSeen:
+    position: np.ndarray
+    left: _Curves
+    right: _Curves
+
+
+@dataclass(frozen=True)
+class _TrackSeen:
+    supports: _SupportsSeen
+
+
+@dataclass(frozen=True)
+class SectionsLinearised:
+    """What `trackdyn.plots.load_deflection` reads of a `LinearisedTrack`, for a long track.
+
+    Parameters
+    ----------
+    track : object
+        ``track.supports``: sleeper ``position`` [m] and curves by rail and sleeper.
+    static_load : float
+        Static wheel load Ps [N].
+    delta : float
+        Dynamic wheel load increment δ [-].
+    k2 : ndarray
+        Effective linearised loaded stiffness (2 rails, sleepers) [N/m].
+    ys : ndarray
+        Static deflection (2 rails, sleepers) [m].
+    """
+
+    track: _TrackSeen
+    static_load: float
+    delta: float
+    k2: np.ndarray
+    ys: np.ndarray
+
+
+def analyse_sections(geometry, supports, static_load, delta, rail_section, **options):
+    """The track job of `trackdyn.track.report` on a long track, section by section.
+
+    Parameters
+    ----------
+    geometry, supports : path
+        Geometry and supports CSV files.
+    static_load : float
+        Static wheel load Ps [N].
+    delta : float
+        Dynamic wheel load increment δ [-].
+    rail_section : RailSection
+        Rail of the voided-sleeper deflection basin.
+    **options
+        Passed to `Track.linearise`, and ``length``, ``margin``, ``rows`` to
+        `track_sections`.
+
+    Returns
+    -------
+    ds : xarray.Dataset
+        As `track_dataset` gives for the whole track.
+    lin : SectionsLinearised
+        Stiffness and deflection of every sleeper, curves of the extreme ones.
+    basin : tuple
+        `voided_basin` over the most voided sleeper of the track.
+    """
+    cutting = {k: options.pop(k) for k in ("length", "margin", "rows") if k in options}
+    parts, kept, best, basin, offset = [], ({}, {}), None, None, 0
+    for section in track_sections(geometry, supports, **cutting):
+        lin = section.track.linearise(static_load, delta, **options)
+        ds = track_dataset(lin, section.keep)
+        first = int(np.searchsorted(lin.track.supports.position, section.keep[0] - _TOL))
+        core = slice(first, first + ds.sizes["sleeper"])
+        r, i = most_voided(lin, core)
+        key = (-lin.seating_gap()[r, i], r, offset + i - first)
+        if best is None or key < best:
+            best, basin = key, voided_basin(lin, rail_section, sleepers=core)
+        for values, pick in ((lin.k2, np.argmin), (lin.k2, np.argmax), (lin.ys, np.argmax)):
+            r, i = np.unravel_index(pick(values[:, core]), values[:, core].shape)
+            kept[r][offset + i] = getattr(lin.track.supports, RAILS[r])[first + i]
+        parts.append(ds)
+        offset += ds.sizes["sleeper"]
+    ds = _join(parts)
+    position = ds.sleeper_distance.values
+    curves = [_Curves(k, supports, rail, position) for k, rail in zip(kept, RAILS, strict=True)]
+    seen = _TrackSeen(_SupportsSeen(position, *curves))
+    return ds, SectionsLinearised(seen, static_load, delta, ds.k2.values, ds.ys.values), basin
+
+
+def _join(parts: list[xr.Dataset]) -> xr.Dataset:
+    """The sections' datasets (from `track_dataset`) joined along the track."""
+    first, along = parts[0], ("distance", "sleeper", "segment")
+    variables = {}
+    for name, var in first.variables.items():
+        dim = next((d for d in var.dims if d in along), None)
+        pieces = [p.variables[name] for p in parts]
+        variables[name] = var if dim is None else xr.Variable.concat(pieces, dim)
+    coords = {name: variables.pop(name) for name in first.coords}
+    return xr.Dataset(variables, coords=coords, attrs=first.attrs)
