@@ -6,8 +6,6 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from trackdyn.errors import TrackdynInputError
-
 BODY_MOTIONS = {"body_bounce": "m/s^2", "body_roll": "rad/s^2", "body_pitch": "rad/s^2"}
 
 
@@ -23,27 +21,16 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
     contacts grouped by bogie side (``model.contact_sides``) also gets
     ``wheel_load_side_mean`` (time, side) [N], the mean over the wheels of each side, which
     compares one to one with the ``wheel_load`` of the bogie models (5.4.3), and the
-    coordinate ``contact_side`` naming each wheel's side.
+    coordinate ``contact_side`` naming each wheel's side. ``out`` holds the `OUTPUTS`
+    arrays of a solver (`trackdyn.solver`), finite.
     """
-    bad = ~np.isfinite(out["q"]).all(axis=1)
-    if bad.any():
-        t = float(time[np.argmax(bad)])
-        raise TrackdynInputError(
-            f"the run gave non-finite displacements from t = {t:.4f} s (vehicle centre at "
-            f"{float(centre[np.argmax(bad)]):.2f} m): check the time step and the input ranges"
-        )
-    n_axles = np.array([len(a) for a in model.contact_axles], dtype=float)
-    # einsum, not BLAS: once numba's parallel runtime has started its threads, BLAS's own
-    # threads make a (steps x dofs) @ (dofs x contacts) product 15 times slower here
-    damping_force = _rows_times(out["v"], model.Dc) * model.contact_damping
-    wheel_load = model.static_wheel_load + (out["fc"] + damping_force) / n_axles
     dofs = list(model.dof_names)
     wedge = ("time", "wedge")
     ds = xr.Dataset(
         {
             "wheel_load": (
                 ("time", "contact"),
-                wheel_load,
+                out["wl"],
                 {
                     "units": "N",
                     "long_name": "wheel load, static included (mean of the wheels of the contact)",
@@ -69,7 +56,7 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
             ),
             "secondary_displacement": (
                 ("time", "suspension"),
-                _rows_times(out["q"], model.Ds),
+                out["sd"],
                 {
                     "units": "m",
                     "long_name": "displacement across "
@@ -137,11 +124,6 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
                 units=units
             )
     return ds
-
-
-def _rows_times(x: np.ndarray, D: np.ndarray) -> np.ndarray:
-    """``x @ D.T`` for a long ``x`` and a small ``D``, without BLAS."""
-    return np.einsum("tj,cj->tc", x, D)
 
 
 def dominant_frequency(signal: np.ndarray, dt: float) -> float:
