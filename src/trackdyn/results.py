@@ -26,79 +26,96 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
     """
     dofs = list(model.dof_names)
     wedge = ("time", "wedge")
-    ds = xr.Dataset(
-        {
-            "wheel_load": (
-                ("time", "contact"),
-                out["wl"],
-                {
-                    "units": "N",
-                    "long_name": "wheel load, static included (mean of the wheels of the contact)",
-                },
-            ),
-            "wheel_input": (
-                ("time", "contact"),
-                out["r"],
-                {
-                    "units": "m",
-                    "long_name": "track input under the contact "
-                    "(loaded profile, or unloaded for the nonlinear track)",
-                    "positive": "down",
-                },
-            ),
-            "track_stiffness": (
-                ("time", "contact"),
-                out["k"],
-                {
-                    "units": "N/m",
-                    "long_name": "track stiffness under the contact (sum over its axles)",
-                },
-            ),
-            "secondary_displacement": (
-                ("time", "suspension"),
-                out["sd"],
-                {
-                    "units": "m",
-                    "long_name": "displacement across "
-                    "the secondary suspension, compression positive",
-                },
-            ),
-            "wedge_force": (
-                wedge,
-                out["fw"],
-                {"units": "N", "long_name": "friction force of the wedge"},
-            ),
-            "wedge_velocity": (
-                wedge,
-                out["vw"],
-                {"units": "m/s", "long_name": "relative velocity across the secondary suspension"},
-            ),
-            "displacement": (
-                ("time", "dof"),
-                out["q"],
-                {
-                    "units": "m or rad",
-                    "long_name": "generalised displacement from static equilibrium",
-                    "positive": "down",
-                },
-            ),
-            "velocity": (("time", "dof"), out["v"], {"units": "m/s or rad/s"}),
-            "acceleration": (("time", "dof"), out["a"], {"units": "m/s^2 or rad/s^2"}),
-        },
-        coords={
-            "time": ("time", time, {"units": "s"}),
-            "distance": ("time", centre, {"units": "m", "long_name": "vehicle centre position"}),
-            "contact": list(model.contact_names),
-            "contact_offset": (
-                "contact",
-                [float(np.mean(a)) for a in model.contact_axles],
-                {"units": "m", "long_name": "contact position ahead of the vehicle centre"},
-            ),
-            "contact_rail": ("contact", list(model.contact_rails)),
-            "suspension": list(model.suspension_names),
-            "wedge": list(model.wedge_names),
-            "dof": dofs,
-        },
+    data = {
+        "wheel_load": (
+            ("time", "contact"),
+            out["wl"],
+            {
+                "units": "N",
+                "long_name": "wheel load, static included (mean of the wheels of the contact)",
+            },
+        ),
+        "wheel_input": (
+            ("time", "contact"),
+            out["r"],
+            {
+                "units": "m",
+                "long_name": "track input under the contact "
+                "(loaded profile, or unloaded for the nonlinear track)",
+                "positive": "down",
+            },
+        ),
+        "track_stiffness": (
+            ("time", "contact"),
+            out["k"],
+            {
+                "units": "N/m",
+                "long_name": "track stiffness under the contact (sum over its axles)",
+            },
+        ),
+        "secondary_displacement": (
+            ("time", "suspension"),
+            out["sd"],
+            {
+                "units": "m",
+                "long_name": "displacement across the secondary suspension, compression positive",
+            },
+        ),
+        "wedge_force": (
+            wedge,
+            out["fw"],
+            {"units": "N", "long_name": "friction force of the wedge"},
+        ),
+        "wedge_velocity": (
+            wedge,
+            out["vw"],
+            {"units": "m/s", "long_name": "relative velocity across the secondary suspension"},
+        ),
+        "displacement": (
+            ("time", "dof"),
+            out["q"],
+            {
+                "units": "m or rad",
+                "long_name": "generalised displacement from static equilibrium",
+                "positive": "down",
+            },
+        ),
+        "velocity": (("time", "dof"), out["v"], {"units": "m/s or rad/s"}),
+        "acceleration": (("time", "dof"), out["a"], {"units": "m/s^2 or rad/s^2"}),
+    }
+    coords = {
+        "time": ("time", time, {"units": "s"}),
+        "distance": ("time", centre, {"units": "m", "long_name": "vehicle centre position"}),
+        "contact": list(model.contact_names),
+        "contact_offset": (
+            "contact",
+            [float(np.mean(a)) for a in model.contact_axles],
+            {"units": "m", "long_name": "contact position ahead of the vehicle centre"},
+        ),
+        "contact_rail": ("contact", list(model.contact_rails)),
+        "suspension": list(model.suspension_names),
+        "wedge": list(model.wedge_names),
+        "dof": dofs,
+    }
+    sides = [s for s in dict.fromkeys(model.contact_sides) if s]
+    if sides:
+        coords["contact_side"] = ("contact", list(model.contact_sides))
+        coords["side"] = sides
+        load = xr.DataArray(
+            out["wl"], dims=("time", "contact"), coords={"contact_side": coords["contact_side"]}
+        )
+        side_mean = load.groupby("contact_side").mean().rename(contact_side="side")
+        data["wheel_load_side_mean"] = (
+            ("time", "side"),
+            side_mean.sel(side=sides).values,
+            {"units": "N", "long_name": "mean wheel load of each bogie side"},
+        )
+    for name, units in BODY_MOTIONS.items():
+        if name in dofs:
+            data[f"{name}_acceleration"] = ("time", out["a"][:, dofs.index(name)], {"units": units})
+    return xr.Dataset(
+        data,
+        coords=coords,
         attrs={
             "model": model.name,
             "vehicle": vehicle.name,
@@ -108,22 +125,6 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
             "track": "nonlinear (5.14)" if nonlinear else "linearised (5.10-5.11)",
         },
     )
-    sides = [s for s in dict.fromkeys(model.contact_sides) if s]
-    if sides:
-        ds = ds.assign_coords(contact_side=("contact", list(model.contact_sides)))
-        of_side = ds.wheel_load.groupby("contact_side")
-        ds["wheel_load_side_mean"] = (
-            of_side.mean()
-            .rename(contact_side="side")
-            .sel(side=sides)
-            .assign_attrs(units="N", long_name="mean wheel load of each bogie side")
-        )
-    for name, units in BODY_MOTIONS.items():
-        if name in dofs:
-            ds[f"{name}_acceleration"] = ds.acceleration.sel(dof=name, drop=True).assign_attrs(
-                units=units
-            )
-    return ds
 
 
 def dominant_frequency(signal: np.ndarray, dt: float) -> float:
