@@ -28,7 +28,7 @@ from __future__ import annotations
 from typing import Protocol
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 from scipy.interpolate import CubicSpline
 
 from trackdyn.errors import TrackdynInputError
@@ -86,42 +86,34 @@ def _interp(x, xp, fp, j):
     return slope * (x - xp[j]) + fp[j]
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True)
 def _sample(centre, axles, pos, k2, ys, knots, coef, k_out, r_out):
-    """Add every axle's stiffness and weighted loaded profile into ``k_out``, ``r_out``
-    (contacts, positions).
+    """Add every axle's stiffness and weighted loaded profile into ``k_out``, ``r_out``.
 
     ``axles`` rows: offset ahead of the centre [m], contact, rail, weight (1 / axles of
     the contact). The profile is the cubic spline ``coef`` on ``knots`` per rail, evaluated
     as scipy's ``PPoly`` does; the operations and their order are those of
     `LinearisedTrack.sample` followed by the sums of `ContactInput`, so the result is the
-    same to the bit. The contacts are sampled in parallel, each adding its axles in order.
+    same to the bit.
     """
-    for c in prange(k_out.shape[0]):
-        for a in range(axles.shape[0]):
-            if int(axles[a, 1]) == c:
-                _add_axle(centre, axles[a], pos, k2, ys, knots, coef, k_out[c], r_out[c])
-
-
-@njit(cache=True)
-def _add_axle(centre, axle, pos, k2, ys, knots, coef, k_out, r_out):
-    """Add one axle's stiffness and weighted loaded profile into its contact's columns."""
-    rail = int(axle[2])
-    j = 0
-    g = 0
-    for s in range(centre.size):
-        x = centre[s] + axle[0]
-        j = _interval(x, pos, j)
-        gi = _interval(x, knots, g)
-        g = min(max(gi, 0), knots.size - 2)
-        d = x - knots[g]
-        z = 1.0
-        spline = 0.0
-        for p in range(4):
-            spline = spline + coef[rail, 3 - p, g] * z
-            z *= d
-        k_out[s] += _interp(x, pos, k2[rail], j)
-        r_out[s] += (spline + _interp(x, pos, ys[rail], j)) * axle[3]
+    for a in range(axles.shape[0]):
+        c = int(axles[a, 1])
+        rail = int(axles[a, 2])
+        j = 0
+        g = 0
+        for s in range(centre.size):
+            x = centre[s] + axles[a, 0]
+            j = _interval(x, pos, j)
+            gi = _interval(x, knots, g)
+            g = min(max(gi, 0), knots.size - 2)
+            d = x - knots[g]
+            z = 1.0
+            spline = 0.0
+            for p in range(4):
+                spline = spline + coef[rail, 3 - p, g] * z
+                z *= d
+            k_out[s, c] += _interp(x, pos, k2[rail], j)
+            r_out[s, c] += (spline + _interp(x, pos, ys[rail], j)) * axles[a, 3]
 
 
 class ContactInput:
@@ -176,13 +168,12 @@ class ContactInput:
                 raise TrackdynInputError(
                     f"position {x0:.2f}-{x1:.2f} m is outside the track ({lo:.2f}-{hi:.2f} m)"
                 )
-        # contact-major, so that the threads of `_sample` write apart
-        k, r = np.zeros((2, len(self.rails), centre.size))
+        k, r = np.zeros((centre.size, len(self.rails))), np.zeros((centre.size, len(self.rails)))
         knots = lin.track.geometry.distance
         _sample(
             centre, self.axles, lin.track.supports.position, lin.k2, lin.ys, knots, self.coef, k, r
         )
-        return k.T, r.T
+        return k, r
 
     def __call__(self, centre: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """See `TrackInput`."""
