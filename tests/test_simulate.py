@@ -9,9 +9,11 @@ import xarray as xr
 from trackdyn.errors import TrackdynInputError
 from trackdyn.options import RunOptions
 from trackdyn.simulation import OUTPUT_STEP, simulate, simulate_batch
+from trackdyn.track.inputs import ContactInput
 from trackdyn.track.support import SupportCurve
 from trackdyn.track.synthetic import synthetic_track
 from trackdyn.track.track import Geometry, Supports, Track
+from trackdyn.vehicle.models import build_model
 from trackdyn.vehicle.parameters import load_vehicle
 
 V = load_vehicle("loaded")
@@ -114,6 +116,37 @@ def test_batch_gives_each_run_its_own_results(lin):
     with pytest.raises(TrackdynInputError) as alone:
         simulate(V, lin, options[4], newton_max_iter=1)
     assert str(failing[1]) == str(alone.value)
+
+
+@pytest.mark.parametrize("model", ["11dof", "full"])
+def test_stored_wheel_load_and_secondary_displacement(lin, model):
+    # the loop stores them at its store step; here they follow, by numpy, from the stored
+    # displacement, velocity, stiffness and input of the linear contacts
+    ds = simulate(V, lin, RunOptions(model=model, speed_kmh=72.0, store_every=3))
+    m = build_model(model, V)
+    q, v = ds.displacement.values, ds.velocity.values
+    axles = np.array([len(a) for a in m.contact_axles])
+    force = ds.track_stiffness.values * (q @ m.Dc.T - ds.wheel_input.values)
+    load = V.static_wheel_load + (force + m.contact_damping * (v @ m.Dc.T)) / axles
+    np.testing.assert_allclose(ds.wheel_load, load, rtol=1e-12, atol=0)
+    sec = ds.secondary_displacement.values
+    np.testing.assert_allclose(sec, q @ m.Ds.T, rtol=1e-12, atol=1e-12 * np.abs(sec).max())
+
+
+def test_non_finite_run_names_time_and_position(lin, monkeypatch):
+    # a track input that turns NaN from 40 m on ends the run there
+    sample = ContactInput.__call__
+
+    def broken(self, centre):
+        k, r, table = sample(self, centre)
+        r[centre >= 40.0] = np.nan
+        return k, r, table
+
+    monkeypatch.setattr(ContactInput, "__call__", broken)
+    with pytest.raises(TrackdynInputError, match="non-finite displacements") as err:
+        simulate(V, lin, RunOptions(speed_kmh=72.0, store_every=1))
+    centre = float(re.search(r"centre at ([\d.]+) m", str(err.value)).group(1))
+    assert 40.0 <= centre <= 40.01
 
 
 @pytest.mark.parametrize(

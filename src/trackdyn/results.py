@@ -6,8 +6,6 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from trackdyn.errors import TrackdynInputError
-
 BODY_MOTIONS = {"body_bounce": "m/s^2", "body_roll": "rad/s^2", "body_pitch": "rad/s^2"}
 
 
@@ -23,95 +21,101 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
     contacts grouped by bogie side (``model.contact_sides``) also gets
     ``wheel_load_side_mean`` (time, side) [N], the mean over the wheels of each side, which
     compares one to one with the ``wheel_load`` of the bogie models (5.4.3), and the
-    coordinate ``contact_side`` naming each wheel's side.
+    coordinate ``contact_side`` naming each wheel's side. ``out`` holds the `OUTPUTS`
+    arrays of a solver (`trackdyn.solver`), finite.
     """
-    bad = ~np.isfinite(out["q"]).all(axis=1)
-    if bad.any():
-        t = float(time[np.argmax(bad)])
-        raise TrackdynInputError(
-            f"the run gave non-finite displacements from t = {t:.4f} s (vehicle centre at "
-            f"{float(centre[np.argmax(bad)]):.2f} m): check the time step and the input ranges"
-        )
-    n_axles = np.array([len(a) for a in model.contact_axles], dtype=float)
-    # einsum, not BLAS: once numba's parallel runtime has started its threads, BLAS's own
-    # threads make a (steps x dofs) @ (dofs x contacts) product 15 times slower here
-    damping_force = _rows_times(out["v"], model.Dc) * model.contact_damping
-    wheel_load = model.static_wheel_load + (out["fc"] + damping_force) / n_axles
     dofs = list(model.dof_names)
     wedge = ("time", "wedge")
-    ds = xr.Dataset(
-        {
-            "wheel_load": (
-                ("time", "contact"),
-                wheel_load,
-                {
-                    "units": "N",
-                    "long_name": "wheel load, static included (mean of the wheels of the contact)",
-                },
-            ),
-            "wheel_input": (
-                ("time", "contact"),
-                out["r"],
-                {
-                    "units": "m",
-                    "long_name": "track input under the contact "
-                    "(loaded profile, or unloaded for the nonlinear track)",
-                    "positive": "down",
-                },
-            ),
-            "track_stiffness": (
-                ("time", "contact"),
-                out["k"],
-                {
-                    "units": "N/m",
-                    "long_name": "track stiffness under the contact (sum over its axles)",
-                },
-            ),
-            "secondary_displacement": (
-                ("time", "suspension"),
-                _rows_times(out["q"], model.Ds),
-                {
-                    "units": "m",
-                    "long_name": "displacement across "
-                    "the secondary suspension, compression positive",
-                },
-            ),
-            "wedge_force": (
-                wedge,
-                out["fw"],
-                {"units": "N", "long_name": "friction force of the wedge"},
-            ),
-            "wedge_velocity": (
-                wedge,
-                out["vw"],
-                {"units": "m/s", "long_name": "relative velocity across the secondary suspension"},
-            ),
-            "displacement": (
-                ("time", "dof"),
-                out["q"],
-                {
-                    "units": "m or rad",
-                    "long_name": "generalised displacement from static equilibrium",
-                    "positive": "down",
-                },
-            ),
-            "velocity": (("time", "dof"), out["v"], {"units": "m/s or rad/s"}),
-            "acceleration": (("time", "dof"), out["a"], {"units": "m/s^2 or rad/s^2"}),
-        },
-        coords={
-            "time": ("time", time, {"units": "s"}),
-            "distance": ("time", centre, {"units": "m", "long_name": "vehicle centre position"}),
-            "contact": list(model.contact_names),
-            "contact_offset": (
-                "contact",
-                [float(np.mean(a)) for a in model.contact_axles],
-                {"units": "m", "long_name": "contact position ahead of the vehicle centre"},
-            ),
-            "contact_rail": ("contact", list(model.contact_rails)),
-            "suspension": list(model.suspension_names),
-            "wedge": list(model.wedge_names),
-            "dof": dofs,
-        },
+    data = {
+        "wheel_load": (
+            ("time", "contact"),
+            out["wl"],
+            {
+                "units": "N",
+                "long_name": "wheel load, static included (mean of the wheels of the contact)",
+            },
+        ),
+        "wheel_input": (
+            ("time", "contact"),
+            out["r"],
+            {
+                "units": "m",
+                "long_name": "track input under the contact "
+                "(loaded profile, or unloaded for the nonlinear track)",
+                "positive": "down",
+            },
+        ),
+        "track_stiffness": (
+            ("time", "contact"),
+            out["k"],
+            {
+                "units": "N/m",
+                "long_name": "track stiffness under the contact (sum over its axles)",
+            },
+        ),
+        "secondary_displacement": (
+            ("time", "suspension"),
+            out["sd"],
+            {
+                "units": "m",
+                "long_name": "displacement across the secondary suspension, compression positive",
+            },
+        ),
+        "wedge_force": (
+            wedge,
+            out["fw"],
+            {"units": "N", "long_name": "friction force of the wedge"},
+        ),
+        "wedge_velocity": (
+            wedge,
+            out["vw"],
+            {"units": "m/s", "long_name": "relative velocity across the secondary suspension"},
+        ),
+        "displacement": (
+            ("time", "dof"),
+            out["q"],
+            {
+                "units": "m or rad",
+                "long_name": "generalised displacement from static equilibrium",
+                "positive": "down",
+            },
+        ),
+        "velocity": (("time", "dof"), out["v"], {"units": "m/s or rad/s"}),
+        "acceleration": (("time", "dof"), out["a"], {"units": "m/s^2 or rad/s^2"}),
+    }
+    coords = {
+        "time": ("time", time, {"units": "s"}),
+        "distance": ("time", centre, {"units": "m", "long_name": "vehicle centre position"}),
+        "contact": list(model.contact_names),
+        "contact_offset": (
+            "contact",
+            [float(np.mean(a)) for a in model.contact_axles],
+            {"units": "m", "long_name": "contact position ahead of the vehicle centre"},
+        ),
+        "contact_rail": ("contact", list(model.contact_rails)),
+        "suspension": list(model.suspension_names),
+        "wedge": list(model.wedge_names),
+        "dof": dofs,
+    }
+    sides = [s for s in dict.fromkeys(model.contact_sides) if s]
+    if sides:
+        coords["contact_side"] = ("contact", list(model.contact_sides))
+        coords["side"] = sides
+        load = xr.DataArray(
+            out["wl"], dims=("time", "contact"), coords={"contact_side": coords["contact_side"]}
+        )
+        side_mean = load.groupby("contact_side").mean().rename(contact_side="side")
+        data["wheel_load_side_mean"] = (
+            ("time", "side"),
+            side_mean.sel(side=sides).values,
+            {"units": "N", "long_name": "mean wheel load of each bogie side"},
+        )
+    for name, units in BODY_MOTIONS.items():
+        if name in dofs:
+            data[f"{name}_acceleration"] = ("time", out["a"][:, dofs.index(name)], {"units": units})
+    return xr.Dataset(
+        data,
+        coords=coords,
         attrs={
             "model": model.name,
             "vehicle": vehicle.name,
@@ -121,27 +125,6 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
             "track": "nonlinear (5.14)" if nonlinear else "linearised (5.10-5.11)",
         },
     )
-    sides = [s for s in dict.fromkeys(model.contact_sides) if s]
-    if sides:
-        ds = ds.assign_coords(contact_side=("contact", list(model.contact_sides)))
-        of_side = ds.wheel_load.groupby("contact_side")
-        ds["wheel_load_side_mean"] = (
-            of_side.mean()
-            .rename(contact_side="side")
-            .sel(side=sides)
-            .assign_attrs(units="N", long_name="mean wheel load of each bogie side")
-        )
-    for name, units in BODY_MOTIONS.items():
-        if name in dofs:
-            ds[f"{name}_acceleration"] = ds.acceleration.sel(dof=name, drop=True).assign_attrs(
-                units=units
-            )
-    return ds
-
-
-def _rows_times(x: np.ndarray, D: np.ndarray) -> np.ndarray:
-    """``x @ D.T`` for a long ``x`` and a small ``D``, without BLAS."""
-    return np.einsum("tj,cj->tc", x, D)
 
 
 def dominant_frequency(signal: np.ndarray, dt: float) -> float:

@@ -39,8 +39,10 @@ from numba import njit, prange
 from trackdyn.errors import TrackdynInputError
 from trackdyn.solver.statics import (
     Problem,
+    contact_table,
     contact_table_force,
     failure,
+    non_finite,
     start_path,
     table_step,
     wedge_forces,
@@ -52,23 +54,34 @@ CHUNK_STEPS = 20_000
 """Steps of all runs of a batch advanced per compiled call; bounds the memory of the
 sampled track input."""
 
+DONE, NEWTON_FAILED, NOT_FINITE = 0, 1, 2
+"""How `advance` ends: all steps done; no Newton solution at a step; a stored
+displacement not finite."""
+
+_EXPONENT = 0x7FF0000000000000
+"""Exponent bits of a float64, all set for inf and NaN (a test that ``fastmath`` keeps)."""
+
 
 @njit(cache=True, fastmath=True, error_model="numpy")
 def advance(
     p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dc_idx, dc_val, dw_idx, dw_val,
-    H, jinv, wedge, static_load,
+    ds_idx, ds_val, H, jinv, wedge, contact, static_load,
     k_in, r_in, table, y_start, y_step,
     z, dt, step0, store_every, max_iter,
-    out_q, out_v, out_a, out_fc, out_fw, out_vw, out_k, out_r,
+    out_q, out_v, out_a, out_wl, out_sd, out_fw, out_vw, out_k, out_r,
 ):  # fmt: skip
     """Advance one run ``k_in.shape[0]`` steps from ``z = [q0, q-1]``, updated in place.
 
     Contacts are linear, ``f = k (Dc q - r)``, when ``table`` has no rows, and tabulated
     (``f = P(Dc q - r) - Ps``) otherwise. Every ``store_every``-th global step is written
-    to the ``out_*`` arrays from their first row on (`OUTPUTS`).
+    to the ``out_*`` arrays from their first row on (`OUTPUTS`); the wheel load is
+    ``static_load + (f + c_d Dc v) / axles`` with ``contact`` rows ``(c_d, axles)``.
 
-    Returns -1 on success, or the chunk-local index of the step whose Newton iteration
-    did not converge.
+    Returns
+    -------
+    tuple of int
+        `DONE`, `NEWTON_FAILED` or `NOT_FINITE`, and the chunk-local index of that step
+        (-1 when done).
     """
     n = p_idx.shape[0]
     nc = dc_idx.shape[0]
@@ -85,6 +98,7 @@ def advance(
     f_down = np.empty(nw)
     F = np.zeros(nw)
     state = np.zeros(nw, np.int64)  # 0 stick, 1 slip in compression, 2 slip in extension
+    z_bits = z.view(np.int64)
     stored = 0
     to_store = -step0 % store_every  # steps until the next stored one (no modulo per step)
     for s in range(k_in.shape[0]):
@@ -153,7 +167,7 @@ def advance(
                     converged = True
                     break
             if not converged:
-                return s
+                return NEWTON_FAILED, s
             for w in range(nw):
                 if state[w] == 0:
                     F[w] = wedge[w, 3] * v[w]
@@ -164,13 +178,23 @@ def advance(
         if to_store == 0:
             to_store = store_every
             for i in range(n):
+                if z_bits[i] & _EXPONENT == _EXPONENT:
+                    return NOT_FINITE, s
                 out_q[stored, i] = z[i]
                 out_v[stored, i] = (q1[i] - z[n + i]) * inv2dt
                 out_a[stored, i] = (q1[i] - 2.0 * z[i] + z[n + i]) * invdt2
             for c in range(nc):
-                out_fc[stored, c] = fc[c]
+                dv = 0.0
+                for j in range(dc_idx.shape[1]):
+                    dv += dc_val[c, j] * out_v[stored, dc_idx[c, j]]
+                out_wl[stored, c] = static_load + (fc[c] + contact[c, 0] * dv) / contact[c, 1]
                 out_k[stored, c] = k_in[s, c]
                 out_r[stored, c] = r_in[s, c]
+            for u in range(ds_idx.shape[0]):
+                d = 0.0
+                for j in range(ds_idx.shape[1]):
+                    d += ds_val[u, j] * z[ds_idx[u, j]]
+                out_sd[stored, u] = d
             for w in range(nw):
                 out_fw[stored, w] = F[w]
                 out_vw[stored, w] = v[w]
@@ -179,36 +203,37 @@ def advance(
         for i in range(n):
             z[n + i] = z[i]
             z[i] = q1[i]
-    return -1
+    return DONE, -1
 
 
 @njit(cache=True, parallel=True)
 def advance_batch(
     p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dc_idx, dc_val, dw_idx, dw_val,
-    H, jinv, wedge, static_load,
+    ds_idx, ds_val, H, jinv, wedge, contact, static_load,
     k_in, r_in, table, y_start, y_step, in_start,
     z, dt, step0, store_every, max_iter, row0,
-    out_q, out_v, out_a, out_fc, out_fw, out_vw, out_k, out_r, status,
+    out_q, out_v, out_a, out_wl, out_sd, out_fw, out_vw, out_k, out_r, status,
 ):  # fmt: skip
     """`advance` for a batch of runs, in parallel over the runs.
 
     Every array of `StepMatrices` and ``static_load, y_start, y_step, z, dt, step0,
     store_every`` carry a leading run axis; the inputs of run ``b`` are the rows
     ``in_start[b]:in_start[b + 1]`` of ``k_in``, ``r_in`` (and ``table``), its stored
-    steps go to the output rows from ``row0[b]`` on. ``status[b]`` is set as `advance`
-    returns it.
+    steps go to the output rows from ``row0[b]`` on. ``status[b]`` is set to the pair
+    `advance` returns.
     """
     for b in prange(z.shape[0]):
         lo, hi = in_start[b], in_start[b + 1]
         tab = table[lo:hi] if table.shape[0] > 0 else table
         r0 = row0[b]
-        status[b] = advance(
+        status[b, 0], status[b, 1] = advance(
             p_idx[b], p_val[b], gc_idx[b], gc_val[b], gw_idx[b], gw_val[b], dc_idx[b],
-            dc_val[b], dw_idx[b], dw_val[b], H[b], jinv[b], wedge[b], static_load[b],
+            dc_val[b], dw_idx[b], dw_val[b], ds_idx[b], ds_val[b], H[b], jinv[b],
+            wedge[b], contact[b], static_load[b],
             k_in[lo:hi], r_in[lo:hi], tab, y_start[b], y_step[b],
             z[b], dt[b], step0[b], store_every[b], max_iter,
-            out_q[r0:], out_v[r0:], out_a[r0:], out_fc[r0:], out_fw[r0:], out_vw[r0:],
-            out_k[r0:], out_r[r0:],
+            out_q[r0:], out_v[r0:], out_a[r0:], out_wl[r0:], out_sd[r0:], out_fw[r0:],
+            out_vw[r0:], out_k[r0:], out_r[r0:],
         )  # fmt: skip
 
 
@@ -254,9 +279,12 @@ class StepMatrices(NamedTuple):
     dc_val: np.ndarray
     dw_idx: np.ndarray
     dw_val: np.ndarray
+    ds_idx: np.ndarray
+    ds_val: np.ndarray
     H: np.ndarray
     jinv: np.ndarray
     wedge: np.ndarray
+    contact: np.ndarray
 
 
 def step_matrices(model, dt) -> StepMatrices:
@@ -264,11 +292,12 @@ def step_matrices(model, dt) -> StepMatrices:
 
     The sparse rows (`_sparse_rows`) of ``P = [A^-1 (2M/Δt² - K), -A^-1 (M/Δt² - C/(2Δt))]``
     acting on ``[q0, q-1]``, of ``Gc^T`` and ``Gw^T`` with ``Gc = A^-1 Dc^T`` and
-    ``Gw = A^-1 Dw^T``, and of ``Dc`` and ``Dw``; ``H``; the inverses of
-    ``I + H diag(C_slope·stick)`` for every stick/slip combination; and per wedge
+    ``Gw = A^-1 Dw^T``, and of ``Dc``, ``Dw`` and ``Ds``; ``H``; the inverses of
+    ``I + H diag(C_slope·stick)`` for every stick/slip combination; per wedge
     ``x_ss [m]``, the slip force per unit spring
     compression in compression and in extension ``k_ss μ / (tan α_w ∓ μ)`` [N/m], and
-    ``C_slope`` [N s/m] (`wedge_table`).
+    ``C_slope`` [N s/m] (`wedge_table`); per contact the track damping [N s/m] and its
+    number of axles (`contact_table`).
     """
     M, C, K, Dc, Dw = model.M, model.C, model.K, model.Dc, model.Dw
     A = M / dt**2 + C / (2 * dt)
@@ -283,8 +312,9 @@ def step_matrices(model, dt) -> StepMatrices:
     for mask in range(2**nw):
         stick = np.array([(mask >> w) & 1 for w in range(nw)], dtype=float)
         jinv[mask] = np.linalg.inv(np.eye(nw) + H * (c_slope * stick)[None, :])
-    sparse = [_sparse_rows(x) for x in (P, (Ainv @ Dc.T).T, Gw.T, Dc, Dw)]
-    return StepMatrices(*(a for pair in sparse for a in pair), H, jinv, wedge)
+    sparse = [_sparse_rows(x) for x in (P, (Ainv @ Dc.T).T, Gw.T, Dc, Dw, model.Ds)]
+    pairs = (a for pair in sparse for a in pair)
+    return StepMatrices(*pairs, H, jinv, wedge, contact_table(model))
 
 
 def _stack(arrays):
@@ -331,7 +361,7 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> 
     y_start, y_step = np.array([table_step(p.inputs.grid) for p in problems]).T
     static = np.array([p.model.static_wheel_load for p in problems])
     dts = np.array([p.dt for p in problems])
-    status = np.empty(len(problems), np.int64)
+    status = np.empty((len(problems), 2), np.int64)
     block = max(1, CHUNK_STEPS // len(problems))
     for first in range(0, max(p.n_steps for p in problems), block):
         sampled, counts = [], []
@@ -346,8 +376,9 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> 
             newton_max_iter, rows[:-1] + (first + every - 1) // every,
             *flat.values(), status,
         )  # fmt: skip
-        for b in np.flatnonzero(status >= 0):
-            errors[b] = failure(problems[b], first + int(status[b]))
+        for b in np.flatnonzero(status[:, 0] != DONE):
+            stop = failure if status[b, 0] == NEWTON_FAILED else non_finite
+            errors[b] = stop(problems[b], first + int(status[b, 1]))
         if advanced is not None:
             advanced(sum(counts))
     return [

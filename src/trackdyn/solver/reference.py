@@ -32,10 +32,12 @@ from trackdyn.errors import TrackdynInputError
 from trackdyn.solver.statics import (
     Problem,
     contact_table_force,
+    non_finite,
     start_path,
     table_step,
     wedge_forces,
     wedge_table,
+    wheel_load,
     widths,
 )
 
@@ -113,8 +115,12 @@ def solve(p: Problem, advanced=None):
         q, v = y[:n], y[n:]
         fc, fw, k, r = eq.forces(t, q, v)
         out["q"][i], out["v"][i], out["a"][i] = q, v, eq.acceleration(t, q, v, fc, fw)
-        out["fc"][i], out["fw"][i], out["vw"][i] = fc, fw, m.Dw @ v
+        out["wl"][i], out["sd"][i] = wheel_load(m, fc, m.Dc @ v), m.Ds @ q
+        out["fw"][i], out["vw"][i] = fw, m.Dw @ v
         out["k"][i], out["r"][i] = k, r
+    bad = ~np.isfinite(out["q"]).all(axis=1)
+    if bad.any():
+        return non_finite(p, int(np.argmax(bad)) * p.store_every)
     if advanced is not None:
         advanced(p.n_steps)
     return out

@@ -20,10 +20,12 @@ from numba import njit
 
 from trackdyn.errors import TrackdynInputError
 
-OUTPUTS = ("q", "v", "a", "fc", "fw", "vw", "k", "r")
+OUTPUTS = ("q", "v", "a", "wl", "sd", "fw", "vw", "k", "r")
 """Stored arrays, (stored steps, width): displacement [m], velocity [m/s], acceleration
-[m/s²] per dof; contact force beyond static without track damping [N]; wedge force [N]
-and velocity [m/s]; contact stiffness [N/m] and input [m] (`trackdyn.track.inputs`)."""
+[m/s²] per dof; wheel load, static and track damping included (mean of the contact's
+wheels, `wheel_load`) [N]; displacement across each secondary suspension ``Ds q`` [m];
+wedge force [N] and velocity [m/s]; contact stiffness [N/m] and input [m]
+(`trackdyn.track.inputs`)."""
 
 
 @dataclass(frozen=True)
@@ -66,7 +68,30 @@ class Problem:
 def widths(model) -> dict[str, int]:
     """Columns of each of the `OUTPUTS` arrays for ``model``."""
     n, nc, nw = len(model.dof_names), len(model.contact_names), len(model.wedge_names)
-    return dict(q=n, v=n, a=n, fc=nc, fw=nw, vw=nw, k=nc, r=nc)
+    ns = len(model.suspension_names)
+    return dict(q=n, v=n, a=n, wl=nc, sd=ns, fw=nw, vw=nw, k=nc, r=nc)
+
+
+def contact_table(model) -> np.ndarray:
+    """Per contact the track damping [N s/m] and the number of axles it stands for."""
+    axles = [float(len(a)) for a in model.contact_axles]
+    return np.column_stack([model.contact_damping, axles]).reshape(-1, 2)
+
+
+def wheel_load(model, fc, dv):
+    """Wheel load [N], static included: ``static + (fc + c_d dv) / axles`` per contact.
+
+    Parameters
+    ----------
+    model : Model
+        Vehicle model.
+    fc : ndarray
+        Contact force beyond static without the track damping [N].
+    dv : ndarray
+        Contact deflection velocity ``Dc v`` [m/s].
+    """
+    contact = contact_table(model)
+    return model.static_wheel_load + (fc + contact[:, 0] * dv) / contact[:, 1]
 
 
 @njit(cache=True, inline="always")
@@ -151,6 +176,15 @@ def start_path(p: Problem) -> tuple[np.ndarray, np.ndarray]:
     """
     q0, q1, q2 = (static_state(p.model, p.inputs, p.centre0 + p.speed * p.dt * i) for i in range(3))
     return q0, (-3 * q0 + 4 * q1 - q2) / (2 * p.dt)
+
+
+def non_finite(p: Problem, step: int) -> TrackdynInputError:
+    """The error of a run whose displacements are not finite from ``step`` on."""
+    t = step * p.dt
+    return TrackdynInputError(
+        f"the run gave non-finite displacements from t = {t:.4f} s (vehicle centre at "
+        f"{p.centre0 + p.speed * t:.2f} m): check the time step and the input ranges"
+    )
 
 
 def failure(p: Problem, step: int) -> TrackdynInputError:
