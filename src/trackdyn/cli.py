@@ -17,7 +17,7 @@ from rich.text import Text
 from trackdyn import __version__
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import write_netcdf
-from trackdyn.output import handle_interrupts, output_folder
+from trackdyn.output import output_folder
 
 app = typer.Typer(
     add_completion=False,
@@ -142,7 +142,6 @@ def main(
     ] = False,
 ):
     """Railway vehicle/track vertical dynamics and track deterioration prediction."""
-    handle_interrupts()
 
 
 @app.command()

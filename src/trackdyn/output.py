@@ -54,7 +54,11 @@ def _on_interrupt(signum, frame) -> None:
 
 
 def handle_interrupts() -> None:
-    """End the process on SIGINT/SIGTERM with exit code 130 and no partial outputs."""
+    """End the process on SIGINT/SIGTERM with exit code 130 and no partial outputs.
+
+    Installed by the ``trackdyn`` command (`trackdyn.__main__`) only: a program that calls
+    the CLI's functions keeps its own signal handlers.
+    """
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, _on_interrupt)
 
