@@ -181,10 +181,10 @@ def track(
     section = rail_section(rail)
     with output_folder(out, "track", overwrite) as stage:
         with console.status("reading and linearising the track, section by section"):
-            ds, lin, basin = analyse_sections(
+            ds, picks, basin = analyse_sections(
                 geometry, supports, wheel_load_kN * 1e3, delta, section, extrapolate=extrapolate
             )
-        table = write_track_outputs(ds, lin, basin, stage)
+        table = write_track_outputs(ds, picks, basin, stage)
     _show(table, f"Track summary ({ds.attrs['geometry_source']})")
     console.print(f"wrote track.nc and 3 figures to {out}")
 

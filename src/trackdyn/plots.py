@@ -70,40 +70,36 @@ def track_overview(ds, path) -> None:
     save(fig, path)
 
 
-def load_deflection(lin, path, n: int = 4) -> None:
-    """Measured curves of a few sleepers with their linearisation (as the seed's Fig. 5.3)."""
-    ps, dp = lin.static_load, lin.delta * lin.static_load
-    k2 = lin.k2
-    criteria = {
-        "softest": np.argmin(k2),
-        "stiffest": np.argmax(k2),
-        "largest ys": np.argmax(lin.ys),
-        "median": np.argsort(k2, axis=None)[k2.size // 2],
-    }
-    picks: dict[int, list[str]] = {}  # one curve per sleeper, naming every criterion it meets
-    for label, flat in list(criteria.items())[:n]:
-        picks.setdefault(int(flat), []).append(label)
+def load_deflection(picks, static_load: float, delta: float, path) -> None:
+    """Measured curves of a few sleepers with their linearisation (as the seed's Fig. 5.3).
+
+    Parameters
+    ----------
+    picks : list of CurvePick
+        The sleepers (`trackdyn.track.report.curve_picks`).
+    static_load : float
+        Static wheel load Ps [N].
+    delta : float
+        Dynamic wheel load increment δ [-].
+    path : path
+        PNG file to write.
+    """
+    ps, dp = static_load, delta * static_load
     fig, ax = plt.subplots(figsize=(8, 6))
-    supports = lin.track.supports
-    for j, ((flat, labels), colour) in enumerate(
-        zip(picks.items(), plt.cm.tab10.colors, strict=False)
-    ):
-        label = " and ".join(labels)
-        r, i = np.unravel_index(flat, k2.shape)
-        rail = ("left", "right")[r]
-        curve = getattr(supports, rail)[i]
+    for j, (pick, colour) in enumerate(zip(picks, plt.cm.tab10.colors, strict=False)):
+        curve = pick.curve
         loads = np.linspace(curve.load[0], curve.load[-1], 200)
         ax.plot(curve.deflection * 1e3, curve.load / 1e3, "o", color=colour, ms=4)
         ax.plot(
             curve.deflection_at(loads) * 1e3,
             loads / 1e3,
             color=colour,
-            label=f"{label}: {rail} rail, {supports.position[i]:.1f} m, "
-            f"k2 = {k2[r, i] / 1e6:.0f} kN/mm",
+            label=f"{pick.label}: {pick.rail} rail, {pick.position:.1f} m, "
+            f"k2 = {pick.k2 / 1e6:.0f} kN/mm",
         )
         p = np.array([ps - 1.6 * dp, ps + 1.6 * dp])
         ax.plot(
-            (lin.ys[r, i] + (p - ps) / k2[r, i]) * 1e3,
+            (pick.ys + (p - ps) / pick.k2) * 1e3,
             p / 1e3,
             "--",
             color="k",

@@ -88,3 +88,18 @@ def test_track_needs_overlap():
     trk = Track(Geometry(x, 0 * x, 0 * x), Supports.linear(np.arange(20.3, 30, 0.6), 1e8, 1e8))
     with pytest.raises(TrackdynInputError, match="do not overlap"):
         _ = trk.extent
+
+
+def test_curve_picks_name_each_sleeper_once_with_every_criterion_it_meets():
+    from trackdyn.track.report import curve_picks
+
+    # 2 rails x 3 sleepers: left 1 is the softest and has the largest ys; right 2 is the
+    # stiffest; sorted k2 is 50, 80, 90, 100, 120, 300, so the median (index 3) is 100
+    k2 = np.array([[80e6, 50e6, 120e6], [100e6, 90e6, 300e6]])
+    ys = np.array([[2e-3, 5e-3, 1e-3], [1e-3, 2e-3, 0.5e-3]])
+    picks = curve_picks(k2, ys, np.array([0.3, 0.9, 1.5]), lambda r, i: (r, i))
+    assert [(p.label, p.rail, p.position, p.curve) for p in picks] == [
+        ("softest and largest ys", "left", 0.9, (0, 1)),
+        ("stiffest", "right", 1.5, (1, 2)),
+        ("median", "right", 0.3, (1, 0)),
+    ]

@@ -36,7 +36,7 @@ def test_sections_cover_the_track_in_cores(files):
 def test_sections_give_the_whole_track_results(files):
     lin = load_track(*files).linearise(PS, 0.3)
     whole = track_dataset(lin)
-    ds, seen, basin = analyse_sections(*files, PS, 0.3, rail_section("60E1"), **CUTTING)
+    ds, picks, basin = analyse_sections(*files, PS, 0.3, rail_section("60E1"), **CUTTING)
     for name in ("k2", "ys", "loaded_profile", "unloaded_profile", "sleeper_distance"):
         np.testing.assert_array_equal(ds[name].values, whole[name].values)
     np.testing.assert_array_equal(ds.distance.values, whole.distance.values)
@@ -47,13 +47,20 @@ def test_sections_give_the_whole_track_results(files):
     rail, x0, with_gap, _ = voided_basin(lin, rail_section("60E1"))
     assert (basin[0], basin[1]) == (rail, x0)
     np.testing.assert_array_equal(basin[2].deflection, with_gap.deflection)
-    np.testing.assert_array_equal(seen.k2, lin.k2)
-    median = np.argsort(lin.k2, axis=None)[lin.k2.size // 2]  # kept, or read again
-    for flat in (np.argmin(lin.k2), np.argmax(lin.ys), median):
-        r, i = np.unravel_index(flat, lin.k2.shape)
-        rail = ("left", "right")[r]
-        curve = getattr(seen.track.supports, rail)[i]
-        np.testing.assert_array_equal(curve.load, getattr(lin.track.supports, rail)[i].load)
+    # the figure's curves (kept from their section, or read again from the file) are the
+    # whole track's extremes and median, as read at once
+    softest, stiffest = np.argmin(lin.k2), np.argmax(lin.k2)
+    median = np.argsort(lin.k2, axis=None)[lin.k2.size // 2]
+    expected = {int(f) for f in (softest, stiffest, np.argmax(lin.ys), median)}
+    assert len(picks) == len(expected)
+    for pick in picks:
+        r = ("left", "right").index(pick.rail)
+        i = int(np.flatnonzero(lin.track.supports.position == pick.position)[0])
+        assert np.ravel_multi_index((r, i), lin.k2.shape) in expected
+        assert (pick.k2, pick.ys) == (lin.k2[r, i], lin.ys[r, i])
+        whole = getattr(lin.track.supports, pick.rail)[i]
+        np.testing.assert_array_equal(pick.curve.load, whole.load)
+        np.testing.assert_array_equal(pick.curve.deflection, whole.deflection)
 
 
 def test_a_bad_row_in_the_last_piece_is_named_by_its_line(files, tmp_path):

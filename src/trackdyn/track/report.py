@@ -11,7 +11,7 @@ and spatially varying track stiffness. PhD thesis, University of Pretoria, §5.1
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
@@ -164,16 +164,75 @@ def summary_table(ds: xr.Dataset) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def write_track_outputs(ds: xr.Dataset, lin, basin, folder) -> pd.DataFrame:
+@dataclass(frozen=True)
+class CurvePick:
+    """A sleeper's measured curve picked for the load-deflection figure.
+
+    Parameters
+    ----------
+    label : str
+        Why it was picked (``softest``, ``stiffest``, ``largest ys``, ``median``, joined
+        when one curve meets several).
+    rail : str
+        ``left`` or ``right``.
+    position : float
+        Sleeper position [m].
+    curve : SupportCurve
+        The measured curve.
+    k2 : float
+        Its linearised stiffness [N/m].
+    ys : float
+        Its static deflection [m].
+    """
+
+    label: str
+    rail: str
+    position: float
+    curve: object
+    k2: float
+    ys: float
+
+
+def curve_picks(k2: np.ndarray, ys: np.ndarray, position: np.ndarray, curve) -> list[CurvePick]:
+    """The softest, stiffest, largest-ys and median sleepers, one pick per sleeper.
+
+    Parameters
+    ----------
+    k2, ys : ndarray
+        Linearised stiffness [N/m] and static deflection [m], (2 rails, sleepers).
+    position : ndarray
+        Sleeper positions [m].
+    curve : callable
+        ``curve(r, i)``: the measured curve of rail ``r`` at sleeper ``i``.
+    """
+    criteria = {
+        "softest": np.argmin(k2),
+        "stiffest": np.argmax(k2),
+        "largest ys": np.argmax(ys),
+        "median": np.argsort(k2, axis=None)[k2.size // 2],
+    }
+    labels: dict[int, list[str]] = {}
+    for label, flat in criteria.items():
+        labels.setdefault(int(flat), []).append(label)
+    picks = []
+    for flat, names in labels.items():
+        r, i = (int(v) for v in np.unravel_index(flat, k2.shape))
+        picks.append(
+            CurvePick(" and ".join(names), RAILS[r], float(position[i]), curve(r, i),
+                      float(k2[r, i]), float(ys[r, i]))
+        )  # fmt: skip
+    return picks
+
+
+def write_track_outputs(ds: xr.Dataset, picks, basin, folder) -> pd.DataFrame:
     """Write ``track.nc`` and the three track figures into ``folder``; return the summary.
 
     Parameters
     ----------
     ds : xarray.Dataset
         Result of `track_dataset` (or of the sections of a long track, joined).
-    lin : LinearisedTrack
-        Track linearised about the static wheel load, or what `plots.load_deflection`
-        reads of it.
+    picks : list of CurvePick
+        Curves of the load-deflection figure (`curve_picks`).
     basin : tuple
         Result of `voided_basin`.
     folder : Path
@@ -182,10 +241,11 @@ def write_track_outputs(ds: xr.Dataset, lin, basin, folder) -> pd.DataFrame:
     from trackdyn import plots
     from trackdyn.io import write_netcdf
 
+    ps, delta = ds.attrs["static_wheel_load_N"], ds.attrs["delta"]
     write_netcdf(ds, folder / "track.nc")
     plots.track_overview(ds, folder / "track_overview.png")
-    plots.load_deflection(lin, folder / "load_deflection.png")
-    plots.deflection_basin(*basin, lin.static_load, folder / "deflection_basin.png")
+    plots.load_deflection(picks, ps, delta, folder / "load_deflection.png")
+    plots.deflection_basin(*basin, ps, folder / "deflection_basin.png")
     return summary_table(ds)
 
 

@@ -30,7 +30,13 @@ from trackdyn.io import (
     support_pieces,
     supports_of,
 )
-from trackdyn.track.report import SEGMENT_M, most_voided, track_dataset, voided_basin
+from trackdyn.track.report import (
+    SEGMENT_M,
+    curve_picks,
+    most_voided,
+    track_dataset,
+    voided_basin,
+)
 from trackdyn.track.track import RAILS, Geometry, Track
 
 SECTION_M = 10_000.0
@@ -187,21 +193,6 @@ def _next_cut(geo: _Rows, x0: float, target: float, margin: float) -> float | No
             return None
 
 
-@dataclass(frozen=True)
-class _Curves:
-    """Curves of one rail looked up by sleeper: those kept, else read again from the file."""
-
-    kept: dict
-    path: object
-    rail: str
-    position: np.ndarray
-
-    def __getitem__(self, i) -> object:
-        if i not in self.kept:
-            self.kept[i] = _read_curve(self.path, self.rail, self.position[i])
-        return self.kept[i]
-
-
 def _read_curve(path, rail: str, position: float):
     """The curve at ``position`` [m] of ``rail`` in a supports file (`SupportCurve`)."""
     found = []
@@ -211,43 +202,6 @@ def _read_curve(path, rail: str, position: float):
         if (rows.distance > position).any():
             break
     return rail_curves(SupportRows.concat(found), rail, path)[1][0]
-
-
-@dataclass(frozen=True)
-class _SupportsSeen:
-    position: np.ndarray
-    left: _Curves
-    right: _Curves
-
-
-@dataclass(frozen=True)
-class _TrackSeen:
-    supports: _SupportsSeen
-
-
-@dataclass(frozen=True)
-class SectionsLinearised:
-    """What `trackdyn.plots.load_deflection` reads of a `LinearisedTrack`, for a long track.
-
-    Parameters
-    ----------
-    track : object
-        ``track.supports``: sleeper ``position`` [m] and curves by rail and sleeper.
-    static_load : float
-        Static wheel load Ps [N].
-    delta : float
-        Dynamic wheel load increment δ [-].
-    k2 : ndarray
-        Effective linearised loaded stiffness (2 rails, sleepers) [N/m].
-    ys : ndarray
-        Static deflection (2 rails, sleepers) [m].
-    """
-
-    track: _TrackSeen
-    static_load: float
-    delta: float
-    k2: np.ndarray
-    ys: np.ndarray
 
 
 def analyse_sections(geometry, supports, static_load, delta, rail_section, **options):
@@ -271,8 +225,9 @@ def analyse_sections(geometry, supports, static_load, delta, rail_section, **opt
     -------
     ds : xarray.Dataset
         As `track_dataset` gives for the whole track.
-    lin : SectionsLinearised
-        Stiffness and deflection of every sleeper, curves of the extreme ones.
+    picks : list of CurvePick
+        The curves of the load-deflection figure, as `curve_picks` picks them over the
+        whole track (a curve not kept from its section is read again from the file).
     basin : tuple
         `voided_basin` over the most voided sleeper of the track.
     """
@@ -294,9 +249,11 @@ def analyse_sections(geometry, supports, static_load, delta, rail_section, **opt
         offset += ds.sizes["sleeper"]
     ds = _join(parts)
     position = ds.sleeper_distance.values
-    curves = [_Curves(k, supports, rail, position) for k, rail in zip(kept, RAILS, strict=True)]
-    seen = _TrackSeen(_SupportsSeen(position, *curves))
-    return ds, SectionsLinearised(seen, static_load, delta, ds.k2.values, ds.ys.values), basin
+
+    def curve(r, i):
+        return kept[r][i] if i in kept[r] else _read_curve(supports, RAILS[r], position[i])
+
+    return ds, curve_picks(ds.k2.values, ds.ys.values, position, curve), basin
 
 
 def _join(parts: list[xr.Dataset]) -> xr.Dataset:
