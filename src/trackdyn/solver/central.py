@@ -31,6 +31,7 @@ Bathe, K.J. (1996). Finite Element Procedures. Prentice Hall, Englewood Cliffs, 
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from typing import NamedTuple
 
 import numpy as np
@@ -54,9 +55,10 @@ CHUNK_STEPS = 20_000
 """Steps of all runs of a batch advanced per compiled call; bounds the memory of the
 sampled track input."""
 
-DONE, NEWTON_FAILED, NOT_FINITE = 0, 1, 2
+DONE, NEWTON_FAILED, NOT_FINITE, NOT_STARTED = 0, 1, 2, 3
 """How `advance` ends: all steps done; no Newton solution at a step; a stored
-displacement not finite."""
+displacement not finite. `advance_batch` leaves runs in any state but `DONE` alone
+(`NOT_STARTED`: no start state)."""
 
 _EXPONENT = 0x7FF0000000000000
 """Exponent bits of a float64, all set for inf and NaN (a test that ``fastmath`` keeps)."""
@@ -206,7 +208,7 @@ def advance(
     return DONE, -1
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def advance_batch(
     p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dc_idx, dc_val, dw_idx, dw_val,
     ds_idx, ds_val, H, jinv, wedge, contact, static_load,
@@ -219,22 +221,23 @@ def advance_batch(
     Every array of `StepMatrices` and ``static_load, y_start, y_step, z, dt, step0,
     store_every`` carry a leading run axis; the inputs of run ``b`` are the rows
     ``in_start[b]:in_start[b + 1]`` of ``k_in``, ``r_in`` (and ``table``), its stored
-    steps go to the output rows from ``row0[b]`` on. ``status[b]`` is set to the pair
-    `advance` returns.
+    steps go to the output rows from ``row0[b]`` on. A run whose ``status[b, 0]`` is not
+    `DONE` has stopped and is left alone; the others get there the pair `advance` returns.
     """
     for b in prange(z.shape[0]):
-        lo, hi = in_start[b], in_start[b + 1]
-        tab = table[lo:hi] if table.shape[0] > 0 else table
-        r0 = row0[b]
-        status[b, 0], status[b, 1] = advance(
-            p_idx[b], p_val[b], gc_idx[b], gc_val[b], gw_idx[b], gw_val[b], dc_idx[b],
-            dc_val[b], dw_idx[b], dw_val[b], ds_idx[b], ds_val[b], H[b], jinv[b],
-            wedge[b], contact[b], static_load[b],
-            k_in[lo:hi], r_in[lo:hi], tab, y_start[b], y_step[b],
-            z[b], dt[b], step0[b], store_every[b], max_iter,
-            out_q[r0:], out_v[r0:], out_a[r0:], out_wl[r0:], out_sd[r0:], out_fw[r0:],
-            out_vw[r0:], out_k[r0:], out_r[r0:],
-        )  # fmt: skip
+        if status[b, 0] == DONE:
+            lo, hi = in_start[b], in_start[b + 1]
+            tab = table[lo:hi] if table.shape[0] > 0 else table
+            r0 = row0[b]
+            status[b, 0], status[b, 1] = advance(
+                p_idx[b], p_val[b], gc_idx[b], gc_val[b], gw_idx[b], gw_val[b], dc_idx[b],
+                dc_val[b], dw_idx[b], dw_val[b], ds_idx[b], ds_val[b], H[b], jinv[b],
+                wedge[b], contact[b], static_load[b],
+                k_in[lo:hi], r_in[lo:hi], tab, y_start[b], y_step[b],
+                z[b], dt[b], step0[b], store_every[b], max_iter,
+                out_q[r0:], out_v[r0:], out_a[r0:], out_wl[r0:], out_sd[r0:], out_fw[r0:],
+                out_vw[r0:], out_k[r0:], out_r[r0:],
+            )  # fmt: skip
 
 
 def start_state(p: Problem, wedge) -> np.ndarray:
@@ -349,38 +352,55 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> 
     mats = [step_matrices(p.model, p.dt) for p in problems]
     stacked = StepMatrices(*(_stack(list(f)) for f in zip(*mats, strict=True)))
     errors: list = [None] * len(problems)
+    status = np.zeros((len(problems), 2), np.int64)  # DONE: running
     z = np.zeros((len(problems), 2 * len(problems[0].model.dof_names)))
     for b, (p, m) in enumerate(zip(problems, mats, strict=True)):
         try:
             z[b] = start_state(p, m.wedge)
         except TrackdynInputError as exc:
-            errors[b] = exc
+            errors[b], status[b, 0] = exc, NOT_STARTED
     rows = np.cumsum([0] + [p.n_store for p in problems])
     flat = {name: np.empty((rows[-1], w)) for name, w in widths(problems[0].model).items()}
     every = np.array([p.store_every for p in problems])
     y_start, y_step = np.array([table_step(p.inputs.grid) for p in problems]).T
     static = np.array([p.model.static_wheel_load for p in problems])
     dts = np.array([p.dt for p in problems])
-    status = np.empty((len(problems), 2), np.int64)
     block = max(1, CHUNK_STEPS // len(problems))
-    for first in range(0, max(p.n_steps for p in problems), block):
-        sampled, counts = [], []
-        for p, err in zip(problems, errors, strict=True):
-            counts.append(0 if err else max(min(block, p.n_steps - first), 0))
-            centre = p.centre0 + p.speed * p.dt * np.arange(first, first + counts[-1])
-            sampled.append(p.inputs(centre))
+    firsts = range(0, max(p.n_steps for p in problems), block)
+
+    def sample(first):
+        """Track input of the block of steps from ``first`` on (none for stopped runs)."""
+        counts = [
+            0 if status[b, 0] != DONE else max(min(block, p.n_steps - first), 0)
+            for b, p in enumerate(problems)
+        ]
+        sampled = [
+            p.inputs(p.centre0 + p.speed * p.dt * np.arange(first, first + n))
+            for p, n in zip(problems, counts, strict=True)
+        ]
         k, r, table = (np.concatenate(a) for a in zip(*sampled, strict=True))
-        advance_batch(
-            *stacked, static, k, r, table, y_start, y_step,
-            np.cumsum([0, *counts]), z, dts, np.full(len(problems), first), every,
-            newton_max_iter, rows[:-1] + (first + every - 1) // every,
-            *flat.values(), status,
-        )  # fmt: skip
-        for b in np.flatnonzero(status[:, 0] != DONE):
-            stop = failure if status[b, 0] == NEWTON_FAILED else non_finite
-            errors[b] = stop(problems[b], first + int(status[b, 1]))
-        if advanced is not None:
-            advanced(sum(counts))
+        return k, r, table, np.cumsum([0, *counts])
+
+    # the next block's input is sampled in a thread while the compiled loop (which
+    # releases the GIL) advances this one
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        ahead = pool.submit(sample, 0)
+        for first in firsts:
+            k, r, table, in_start = ahead.result()
+            if first + block < firsts.stop:
+                ahead = pool.submit(sample, first + block)
+            advance_batch(
+                *stacked, static, k, r, table, y_start, y_step, in_start,
+                z, dts, np.full(len(problems), first), every,
+                newton_max_iter, rows[:-1] + (first + every - 1) // every,
+                *flat.values(), status,
+            )  # fmt: skip
+            for b in np.flatnonzero((status[:, 0] != DONE) & (status[:, 0] != NOT_STARTED)):
+                if errors[b] is None:
+                    stop = failure if status[b, 0] == NEWTON_FAILED else non_finite
+                    errors[b] = stop(problems[b], first + int(status[b, 1]))
+            if advanced is not None:
+                advanced(int(np.diff(in_start).sum()))
     return [
         errors[b] or {name: a[rows[b] : rows[b + 1]] for name, a in flat.items()}
         for b in range(len(problems))

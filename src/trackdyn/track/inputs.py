@@ -86,7 +86,7 @@ def _interp(x, xp, fp, j):
     return slope * (x - xp[j]) + fp[j]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _sample(centre, axles, pos, k2, ys, knots, coef, k_out, r_out):
     """Add every axle's stiffness and weighted loaded profile into ``k_out``, ``r_out``.
 
