@@ -52,8 +52,12 @@ from trackdyn.solver.statics import (
 )
 
 CHUNK_STEPS = 20_000
-"""Steps of all runs of a batch advanced per compiled call; bounds the memory of the
-sampled track input."""
+"""Steps of a run advanced per compiled call, at most: the input of the next block is
+sampled while the loop runs this one."""
+
+CHUNK_BYTES = 32 * 2**20
+"""Memory of a block's sampled track input, all runs of a batch together, at most [B]
+(a batch's block is shortened to fit; the nonlinear contacts' tables take most)."""
 
 DONE, NEWTON_FAILED, NOT_FINITE, NOT_STARTED = 0, 1, 2, 3
 """How `advance` ends: all steps done; no Newton solution at a step; a stored
@@ -365,7 +369,8 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> 
     y_start, y_step = np.array([table_step(p.inputs.grid) for p in problems]).T
     static = np.array([p.model.static_wheel_load for p in problems])
     dts = np.array([p.dt for p in problems])
-    block = max(1, CHUNK_STEPS // len(problems))
+    step_bytes = 8 * len(problems[0].model.contact_names) * (2 + problems[0].inputs.grid.size)
+    block = max(1, min(CHUNK_STEPS, CHUNK_BYTES // step_bytes // len(problems)))
     firsts = range(0, max(p.n_steps for p in problems), block)
 
     def sample(first):

@@ -72,7 +72,13 @@ def run_task(task: Task) -> dict:
     return run_batch([(0, task)])[0][1]
 
 
-def batches(tasks: list[Task], size: int = 64) -> list[list[tuple[int, Task]]]:
+BATCH_RUNS = 8
+"""Runs of a batch, at most. A batch holds the stored steps of all its runs at once: 32
+runs of 1 km (every 10th step stored, 500 MB) took 1.3 times as long as one by one, from
+touching that much new memory; 4 to 8 runs took 0.9-0.95 times (benchmarks/study.py)."""
+
+
+def batches(tasks: list[Task], size: int = BATCH_RUNS) -> list[list[tuple[int, Task]]]:
     """Tasks grouped for `run_batch`: same track, model, solver and track law, at most
     ``size`` each, with their positions in ``tasks`` (`in_order` puts results back)."""
     groups: dict = {}
@@ -120,7 +126,8 @@ def in_order(batch_results: list[list[tuple[int, dict]]]) -> list[dict]:
 def run_study(tasks: list[Task], *, workers=None, scheduler=None, progress=False) -> list[dict]:
     """Run a study's tasks in batches spread over the workers; results in task order.
 
-    Batches hold at most 64 runs and are made small enough that every worker gets one.
+    Batches hold at most `BATCH_RUNS` runs and are made small enough that every worker
+    gets one.
 
     Parameters
     ----------
@@ -136,7 +143,7 @@ def run_study(tasks: list[Task], *, workers=None, scheduler=None, progress=False
     from trackdyn.parallel import run_tasks
 
     share = -(-len(tasks) // (1 if workers == 1 and not scheduler else workers or cpu_count()))
-    groups = batches(tasks, size=max(1, min(64, share)))
+    groups = batches(tasks, size=max(1, min(BATCH_RUNS, share)))
     done = run_tasks(
         groups, run_batch, workers=workers, scheduler=scheduler, progress=progress,
         label="batches of runs",
