@@ -118,6 +118,24 @@ def test_batch_gives_each_run_its_own_results(lin):
     assert str(failing[1]) == str(alone.value)
 
 
+def test_results_do_not_depend_on_the_block_size(lin, monkeypatch):
+    # The loop advances blocks of steps while the next block's input is sampled in a
+    # thread; the state carried from block to block is all there is, so blocks of 997
+    # steps (odd against store_every = 3) give the default's results to the bit, and a run
+    # whose Newton iteration fails in one block stays stopped in the next ones.
+    from trackdyn.solver import central
+
+    vehicles = [V, load_vehicle("loaded", C_slope=1.0)]
+    options = [RunOptions(speed_kmh=72.0, store_every=3), RunOptions(speed_kmh=90.0, store_every=3)]
+    default = simulate_batch(vehicles, lin, options, newton_max_iter=1)
+    monkeypatch.setattr(central, "CHUNK_STEPS", 997)
+    small = simulate_batch(vehicles, lin, options, newton_max_iter=1)
+    assert isinstance(default[0], TrackdynInputError)
+    assert str(small[0]) == str(default[0])
+    assert default[1].time.size * 3 > 2 * 997  # the run spans several small blocks
+    xr.testing.assert_identical(small[1], default[1])
+
+
 @pytest.mark.parametrize("model", ["11dof", "full"])
 def test_stored_wheel_load_and_secondary_displacement(lin, model):
     # the loop stores them at its store step; here they follow, by numpy, from the stored
