@@ -169,3 +169,21 @@ def test_varandas_closed_forms():
     expect = law.gamma / (law.F0**a / a * S[1_000_000 - 1]) * F2**a / a * (S[-1] - S[999_999])
     assert inc(1.0)[0, 0] == pytest.approx(expect, rel=1e-3)
     assert inc(1.0)[0, 0] < 0.1 * total  # loads below those already seen add little
+
+
+@pytest.mark.parametrize("name", list(LAWS))
+def test_load_sensitivity_is_the_slope_of_settlement_against_load(name):
+    # The loop's stable step rests on d ln e / d ln Q. Measured here through the
+    # accumulation the loop uses: 8065 cycles on fresh ballast at 60 and 66 kN (k2 fixed).
+    # Every law is a pure power of the load for one load level (Varandas: F^(alpha + 1),
+    # up to its 500 N load cells), so the finite-difference slope is the exponent.
+    from trackdyn.deterioration.accumulation import memory
+
+    law = load_law(name)
+    e = []
+    for q in (60e3, 66e3):
+        acc = memory(law, (1, 3))
+        increment = acc.prepare([(0, 8065.0, np.full(3, q), np.full(3, 100e6))])
+        e.append(float(increment(1.0)[0, 1]))
+    slope = np.log(e[1] / e[0]) / np.log(1.1)
+    assert slope == pytest.approx(law.load_sensitivity, rel=2e-3)

@@ -171,6 +171,11 @@ class Ballast:
         self.initial = self.state(np.zeros_like(self.void))
         self._secant0 = {}
 
+    @property
+    def stiffness(self) -> np.ndarray:
+        """Support stiffness per rail seat, the spring behind the gap, (2, n) [N/m]."""
+        return np.array([b.stiffness for b in self.beams])
+
     def state(self, level, previous: BallastState | None = None) -> BallastState:
         """Both rails at rest with ballast settlement ``level`` (2, n) [m].
 

@@ -63,6 +63,12 @@ class LawParameters:
     positive: ClassVar[tuple[str, ...]] = ()
     non_negative: ClassVar[tuple[str, ...]] = ()
 
+    @property
+    def load_sensitivity(self) -> float:
+        """``d ln e / d ln Q`` for a load on fresh ballast [-]: how strongly settlement
+        follows the rail-seat load (sets the loop's stable step, `trackdyn.deterioration.loop`)."""
+        raise NotImplementedError
+
     def __post_init__(self):
         for f in fields(self):
             value = getattr(self, f.name)
@@ -107,6 +113,11 @@ class SettlementLaw(LawParameters):
         for name in ("Q_ref", "k_ref"):
             if getattr(self, name) <= 0:
                 raise TrackdynInputError(f"settlement parameter {name} must be > 0")
+
+    @property
+    def load_sensitivity(self) -> float:
+        """See `LawParameters.load_sensitivity`: ``load_exponent``."""
+        return self.load_exponent
 
     def load_factor(self, Q, k2):
         """``f(Q, k2) = (Q/Q_ref)^load_exponent (k2/k_ref)^stiffness_exponent`` [-].
@@ -295,6 +306,12 @@ class VarandasLaw(LawParameters):
                                        "N0": "-"}  # fmt: skip
     positive: ClassVar[tuple[str, ...]] = ("beta", "gamma", "F0", "N0")
     non_negative: ClassVar[tuple[str, ...]] = ("alpha",)
+
+    @property
+    def load_sensitivity(self) -> float:
+        """See `LawParameters.load_sensitivity`: ``alpha + 1`` (settlement of ``N`` equal
+        cycles goes as ``F^(alpha + 1)``)."""
+        return self.alpha + 1.0
 
     def __post_init__(self):
         super().__post_init__()
