@@ -82,3 +82,22 @@ def test_a_hanging_sleepers_load_goes_to_its_neighbours():
         at = index == i
         assert f_void[at][0] > 1.1 * f_level[at][0]
         assert f_void[index == v][0] < 0.8 * f_level[index == v][0]
+
+
+def test_forces_do_not_depend_on_the_rest_states_solved_before():
+    """The window inverses are re-formed only where the closed supports of the rest state
+    changed: solving on a rough rest state after the level one gives, to the bit, what a
+    fresh beam gives on the rough one alone (and the rough state leaves sleepers hanging,
+    so some windows do change)."""
+    used, fresh = ballast(), ballast()
+    level = np.zeros((2, used.position.size))
+    rough = np.random.default_rng(7).uniform(0.0, 1.5e-3, level.shape)
+    centre = np.arange(used.position.size)
+    at = used.position[:, None] + WHEELS
+    loads = np.tile(LOADS, (centre.size, 1))
+    used.wheel_solve(0, used.state(level), centre, at, loads)
+    state_used, state_fresh = used.state(rough), fresh.state(rough)
+    assert np.any(state_used.hanging_gap[0] > 0)
+    for a, b in zip(used.wheel_solve(0, state_used, centre, at, loads),
+                    fresh.wheel_solve(0, state_fresh, centre, at, loads), strict=True):  # fmt: skip
+        np.testing.assert_array_equal(a, b)

@@ -10,8 +10,8 @@ sleeper under the wheel, for the change from the rest state, held at zero one sl
 beyond the window (the change at 6 m from a wheel is below 0.1 % for a characteristic
 length of 0.8 m, ``e^(-x/L_c)``). The rail rotations of the window are condensed out once
 per window, so that each wheel position is a dense system of ``2 half + 1`` unknowns (the
-deflections at the sleepers); all positions are solved at once (batched), and the set of
-closed supports of each is iterated to convergence (closed where the rail reaches the
+deflections at the sleepers); all positions are solved in one compiled loop, and the set
+of closed supports of each is iterated to convergence (closed where the rail reaches the
 ballast, open elsewhere), starting from the rest state's. The section is extended beyond
 its ends by copies of its end sleepers, as the track goes on beyond a section.
 
@@ -27,6 +27,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 from scipy.linalg import solveh_banded
 
 from trackdyn.errors import TrackdynInputError
@@ -166,6 +167,7 @@ class Windows:
         self.S = K[:, w][:, :, w] - self.T @ K[:, t][:, :, w]  # condensed stiffness
         self.index = np.arange(n)[:, None] + np.arange(self.width)[None, :] + 1  # padded
         self._rest = None  # the rest state the inverses below belong to
+        self._closed = None  # its closed supports per window
         self._inverse = None
 
     def load_vector(self, centre, position, load):
@@ -189,7 +191,7 @@ class Windows:
         dof = np.arange(B)[None, :, None] * ndof + 2 * e[None] + np.arange(4)[:, None, None]
         full = np.bincount(dof.ravel(), shape.ravel(), B * ndof).reshape(B, ndof)
         fw, ft = full[:, 2:-2:2], full[:, 3:-2:2]
-        return fw - np.einsum("bij,bj->bi", self.T[centre], ft)
+        return fw - _gathered_matvec(self.T, centre, np.ascontiguousarray(ft))
 
     def _window_values(self, rest: RailRest, centre):
         """Stiffness, gap, rest deflection and rest force of each row's window, (B, W)."""
@@ -198,12 +200,26 @@ class Windows:
                                                    rest.force))  # fmt: skip
 
     def _inverses(self, rest: RailRest):
-        """Inverse window matrices with the rest state's closed supports, (n, W, W) [m/N]."""
+        """Inverse window matrices with the rest state's closed supports, (n, W, W) [m/N].
+
+        Formed for the windows whose closed supports differ from those of the last rest
+        state; settlement changes few of them from step to step.
+        """
         if self._rest is not rest:
             k, g, u0, _ = self._window_values(rest, np.arange(self.beam.position.size))
-            A = self.S.copy()
-            A[:, np.arange(self.width), np.arange(self.width)] += k * (u0 > g)
-            self._rest, self._inverse = rest, np.linalg.inv(A)
+            closed = u0 > g
+            redo = (
+                slice(None)
+                if self._rest is None
+                else np.flatnonzero(np.any(closed != self._closed, axis=1))
+            )
+            A = self.S[redo].copy()
+            A[:, np.arange(self.width), np.arange(self.width)] += (k * closed)[redo]
+            if self._rest is None:
+                self._inverse = np.linalg.inv(A)
+            elif A.shape[0]:
+                self._inverse[redo] = np.linalg.inv(A)
+            self._rest, self._closed = rest, closed
         return self._inverse
 
     def solve(self, rest: RailRest, centre, force):
@@ -234,55 +250,107 @@ class Windows:
             Total rail deflection [m].
         """
         k, g, u0, f0 = self._window_values(rest, centre)
-        inverse = self._inverses(rest)
-        closed0 = u0 > g
-        base = np.einsum("bij,bj->bi", inverse[centre], force + f0 - k * closed0 * (u0 - g))
-        closed, v = closed0.copy(), base.copy()
-        todo = np.flatnonzero(np.any((u0 + v > g) != closed0, axis=1))
-        for _ in range(MAX_SWEEPS):
-            if todo.size == 0:
-                break
-            t = todo
-            closed[t] = u0[t] + v[t] > g[t]
-            change = k[t] * (closed[t].astype(float) - closed0[t])
-            v[t] = _updated_solve(inverse, centre[t], change, base[t], change * (u0[t] - g[t]))
-            todo = t[np.any((u0[t] + v[t] > g[t]) != closed[t], axis=1)]
-        else:
+        v, unsettled = _window_solve(self._inverses(rest), centre, k, g, u0, f0,
+                                     np.ascontiguousarray(force), MAX_SWEEPS)  # fmt: skip
+        if unsettled:
             raise TrackdynInputError(
-                f"rail-seat forces: the contact of {todo.size} wheel positions did not settle "
+                f"rail-seat forces: the contact of {unsettled} wheel positions did not settle "
                 f"in {MAX_SWEEPS} iterations"
             )
         y = u0 + v
         return self.index[centre] - (self.beam.half + 1), k * np.maximum(y - g, 0.0), y
 
 
-def _updated_solve(inverse, centre, change, base, extra):
-    """Solve ``(A + diag(change)) x = rhs - extra`` per row, given ``base = A^-1 rhs``.
+@njit(cache=True, nogil=True)
+def _gathered_matvec(mats, which, vecs):
+    """``mats[which[b]] @ vecs[b]`` for every row ``b``, without gathering the matrices."""
+    B, (R, C) = vecs.shape[0], mats.shape[1:]
+    out = np.empty((B, R))
+    for b in range(B):
+        m = mats[which[b]]
+        for i in range(R):
+            acc = 0.0
+            for j in range(C):
+                acc += m[i, j] * vecs[b, j]
+            out[b, i] = acc
+    return out
 
-    ``A^-1`` is ``inverse[centre]`` (symmetric). Woodbury identity over the ``m`` nonzero
-    entries of ``change``, ``U`` their unit columns (rows padded to the largest ``m`` with
-    zero entries, which drop out; ``extra`` is zero where ``change`` is):
-    ``x0 = base - A^-1 U U^T extra``, ``(I + D U^T A^-1 U) z = D U^T x0``,
-    ``x = x0 - A^-1 U z``.
 
-    Parameters
-    ----------
-    inverse : ndarray, shape (n, W, W)
-        Inverse window matrices.
-    centre : ndarray, shape (B,)
-        Window of each row.
-    change : ndarray, shape (B, W)
-        Change of each row's diagonal, nonzero in at least one entry per row.
-    base : ndarray, shape (B, W)
-        ``A^-1 rhs`` of each row.
-    extra : ndarray, shape (B, W)
-        Change of the right-hand side, zero where ``change`` is.
+@njit(cache=True, nogil=True)
+def _window_solve(inverse, centre, k, g, u0, f0, force, max_sweeps):
+    """Deflection change of each row's window under ``force``, its supports iterated.
+
+    Row ``b`` solves ``(A + diag(k closed)) v = force + f0 - k closed (u0 - g)`` on window
+    ``centre[b]``, ``A^-1 = inverse[centre[b]]`` (symmetric) being the inverse with the rest
+    state's closed supports ``closed0 = u0 > g``. A row whose supports ``u0 + v > g``
+    differ from ``closed0`` in ``m`` of them is solved from ``base = A^-1 rhs`` by the
+    Woodbury identity, ``U`` the unit columns of those supports and ``D`` their change of
+    stiffness (``±k``): ``x0 = base - A^-1 U D U^T (u0 - g)``,
+    ``(I + D U^T A^-1 U) z = D U^T x0``, ``v = x0 - A^-1 U z``; and again with the new set
+    until it no longer changes.
+
+    Returns
+    -------
+    v : ndarray, shape (B, W)
+        Deflection change from the rest state [m].
+    unsettled : int
+        Rows whose set of closed supports still changed after ``max_sweeps`` solves.
     """
-    m = int(np.max(np.count_nonzero(change, axis=1)))
-    idx = np.argsort(change == 0, axis=1, kind="stable")[:, :m]
-    d = np.take_along_axis(change, idx, 1)  # (B, m)
-    rows = inverse[centre[:, None], idx]  # (B, m, W): U^T A^-1
-    x0 = base - np.einsum("bmw,bm->bw", rows, np.take_along_axis(extra, idx, 1))
-    c = np.eye(m) + d[:, :, None] * np.take_along_axis(rows, idx[:, None, :], 2)
-    z = np.linalg.solve(c, (d * np.take_along_axis(x0, idx, 1))[:, :, None])[:, :, 0]
-    return x0 - np.einsum("bmw,bm->bw", rows, z)
+    B, W = force.shape
+    v = np.empty((B, W))
+    base, rhs0 = np.empty(W), np.empty(W)
+    closed0, closed = np.empty(W, np.bool_), np.empty(W, np.bool_)
+    idx = np.empty(W, np.int64)
+    unsettled = 0
+    for b in range(B):
+        inv = inverse[centre[b]]
+        for j in range(W):
+            closed0[j] = u0[b, j] > g[b, j]
+            rhs0[j] = force[b, j] + f0[b, j]
+            if closed0[j]:
+                rhs0[j] -= k[b, j] * (u0[b, j] - g[b, j])
+        for i in range(W):
+            acc = 0.0
+            for j in range(W):
+                acc += inv[i, j] * rhs0[j]
+            base[i] = acc
+            v[b, i] = acc
+        closed[:] = closed0
+        for sweep in range(max_sweeps + 1):
+            same = True
+            for j in range(W):
+                now = u0[b, j] + v[b, j] > g[b, j]
+                same = same and now == closed[j]
+                closed[j] = now
+            if same:
+                break
+            if sweep == max_sweeps:
+                unsettled += 1
+                break
+            m = 0
+            for j in range(W):
+                if closed[j] != closed0[j]:
+                    idx[m] = j
+                    m += 1
+            x0 = base.copy()
+            d = np.empty(m)
+            for a in range(m):
+                j = idx[a]
+                d[a] = k[b, j] if closed[j] else -k[b, j]
+                e = d[a] * (u0[b, j] - g[b, j])
+                for i in range(W):
+                    x0[i] -= inv[j, i] * e
+            if m > 0:
+                c = np.eye(m)
+                rhs = np.empty(m)
+                for a in range(m):
+                    for q in range(m):
+                        c[a, q] += d[a] * inv[idx[a], idx[q]]
+                    rhs[a] = d[a] * x0[idx[a]]
+                z = np.linalg.solve(c, rhs)
+                for a in range(m):
+                    for i in range(W):
+                        x0[i] -= inv[idx[a], i] * z[a]
+            for i in range(W):
+                v[b, i] = x0[i]
+    return v, unsettled
