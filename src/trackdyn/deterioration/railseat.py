@@ -208,16 +208,14 @@ class Windows:
         if self._rest is not rest:
             k, g, u0, _ = self._window_values(rest, np.arange(self.beam.position.size))
             closed = u0 > g
-            redo = (
-                slice(None)
-                if self._rest is None
-                else np.flatnonzero(np.any(closed != self._closed, axis=1))
-            )
-            A = self.S[redo].copy()
-            A[:, np.arange(self.width), np.arange(self.width)] += (k * closed)[redo]
             if self._rest is None:
-                self._inverse = np.linalg.inv(A)
-            elif A.shape[0]:
+                self._inverse = np.empty_like(self.S)
+                redo = np.arange(closed.shape[0])
+            else:
+                redo = np.flatnonzero(np.any(closed != self._closed, axis=1))
+            if redo.size:
+                A = self.S[redo]
+                A[:, np.arange(self.width), np.arange(self.width)] += (k * closed)[redo]
                 self._inverse[redo] = np.linalg.inv(A)
             self._rest, self._closed = rest, closed
         return self._inverse
@@ -250,8 +248,9 @@ class Windows:
             Total rail deflection [m].
         """
         k, g, u0, f0 = self._window_values(rest, centre)
-        v, unsettled = _window_solve(self._inverses(rest), centre, k, g, u0, f0,
-                                     np.ascontiguousarray(force), MAX_SWEEPS)  # fmt: skip
+        inverse = self._inverses(rest)
+        base = _gathered_matvec(inverse, centre, force + f0 - k * (u0 > g) * (u0 - g))
+        v, unsettled = _window_solve(inverse, centre, k, g, u0, base, MAX_SWEEPS)
         if unsettled:
             raise TrackdynInputError(
                 f"rail-seat forces: the contact of {unsettled} wheel positions did not settle "
@@ -277,17 +276,17 @@ def _gathered_matvec(mats, which, vecs):
 
 
 @njit(cache=True, nogil=True)
-def _window_solve(inverse, centre, k, g, u0, f0, force, max_sweeps):
-    """Deflection change of each row's window under ``force``, its supports iterated.
+def _window_solve(inverse, centre, k, g, u0, base, max_sweeps):
+    """Deflection change of each row's window, its supports iterated.
 
-    Row ``b`` solves ``(A + diag(k closed)) v = force + f0 - k closed (u0 - g)`` on window
-    ``centre[b]``, ``A^-1 = inverse[centre[b]]`` (symmetric) being the inverse with the rest
-    state's closed supports ``closed0 = u0 > g``. A row whose supports ``u0 + v > g``
-    differ from ``closed0`` in ``m`` of them is solved from ``base = A^-1 rhs`` by the
-    Woodbury identity, ``U`` the unit columns of those supports and ``D`` their change of
-    stiffness (``±k``): ``x0 = base - A^-1 U D U^T (u0 - g)``,
-    ``(I + D U^T A^-1 U) z = D U^T x0``, ``v = x0 - A^-1 U z``; and again with the new set
-    until it no longer changes.
+    Row ``b`` solves ``(A + diag(k closed)) v = rhs - k closed (u0 - g)`` on window
+    ``centre[b]`` from ``base = A^-1 (rhs - k closed0 (u0 - g))``, ``A^-1 =
+    inverse[centre[b]]`` (symmetric) being the inverse with the rest state's closed
+    supports ``closed0 = u0 > g``. A row whose supports ``u0 + v > g`` differ from
+    ``closed0`` in ``m`` of them is solved by the Woodbury identity, ``U`` the unit
+    columns of those supports and ``D`` their change of stiffness (``±k``):
+    ``x0 = base - A^-1 U D U^T (u0 - g)``, ``(I + D U^T A^-1 U) z = D U^T x0``,
+    ``v = x0 - A^-1 U z``; and again with the new set until it no longer changes.
 
     Returns
     -------
@@ -296,9 +295,8 @@ def _window_solve(inverse, centre, k, g, u0, f0, force, max_sweeps):
     unsettled : int
         Rows whose set of closed supports still changed after ``max_sweeps`` solves.
     """
-    B, W = force.shape
-    v = np.empty((B, W))
-    base, rhs0 = np.empty(W), np.empty(W)
+    B, W = base.shape
+    v = base.copy()
     closed0, closed = np.empty(W, np.bool_), np.empty(W, np.bool_)
     idx = np.empty(W, np.int64)
     unsettled = 0
@@ -306,15 +304,6 @@ def _window_solve(inverse, centre, k, g, u0, f0, force, max_sweeps):
         inv = inverse[centre[b]]
         for j in range(W):
             closed0[j] = u0[b, j] > g[b, j]
-            rhs0[j] = force[b, j] + f0[b, j]
-            if closed0[j]:
-                rhs0[j] -= k[b, j] * (u0[b, j] - g[b, j])
-        for i in range(W):
-            acc = 0.0
-            for j in range(W):
-                acc += inv[i, j] * rhs0[j]
-            base[i] = acc
-            v[b, i] = acc
         closed[:] = closed0
         for sweep in range(max_sweeps + 1):
             same = True
@@ -332,7 +321,7 @@ def _window_solve(inverse, centre, k, g, u0, f0, force, max_sweeps):
                 if closed[j] != closed0[j]:
                     idx[m] = j
                     m += 1
-            x0 = base.copy()
+            x0 = base[b].copy()
             d = np.empty(m)
             for a in range(m):
                 j = idx[a]

@@ -405,7 +405,7 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> 
                     stop = failure if status[b, 0] == NEWTON_FAILED else non_finite
                     errors[b] = stop(problems[b], first + int(status[b, 1]))
             if advanced is not None:
-                advanced(int(np.diff(in_start).sum()))
+                advanced(int(in_start[-1]))
     return [
         errors[b] or {name: a[rows[b] : rows[b + 1]] for name, a in flat.items()}
         for b in range(len(problems))
