@@ -14,8 +14,8 @@ from trackdyn.deterioration.settlement import (
     SettlementLaw,
     ShentonLaw,
     VarandasLaw,
-    time_hardening_increment,
 )
+from trackdyn.deterioration.zones import RateField, Zone
 
 __all__ = [
     "LAWS",
@@ -24,9 +24,10 @@ __all__ = [
     "SatoLaw",
     "SettlementLaw",
     "ShentonLaw",
+    "RateField",
     "Traffic",
     "VarandasLaw",
+    "Zone",
     "load_law",
     "predict",
-    "time_hardening_increment",
 ]

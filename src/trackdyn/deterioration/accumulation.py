@@ -1,35 +1,39 @@
 """Settlement accumulated over tonnage steps, per rail and sleeper, with the law's memory.
 
-A step's load cycles are the wheels of the traffic: each with its rail-seat load at every
-sleeper of its rail [N] and its cycles per MGT [-]. `prepare` takes them and returns the
-settlement increment as a function of the step length ``ΔM`` [MGT], in closed form for
-loads held over the step (so the loop can choose the step); `advance` then applies the
-step to the law's memory.
+A step's load cycles are the wheels of the traffic: each with its vehicle, its rail, its
+cycles per MGT [-] and its rail-seat load at every sleeper of its rail [N]. `prepare`
+takes them and returns the settlement increment as a function of the step length ``ΔM``
+[MGT], in closed form for loads held over the step (so the loop can choose the step);
+`advance` then applies the step to the law's memory and returns each vehicle's part of it.
 
-- `TimeHardening` (power, Shenton, Sato laws): the memory is the cycle count ``N``;
-  ``Δe = Σ_j (n_j / Σ n) f(Q_j, k2) (g(N + ΔN) - g(N))``, the cycle-weighted mean load
-  factor times the advance on the cycle curve (for one load level, the time-hardening
-  rule).
+- `Hardening` (power, Shenton, Sato laws): the memory is the state of each term of the
+  cycle curve (`trackdyn.deterioration.hardening`): for a power term the equivalent cycles
+  of the reference load, so that every cycle, at any load, adds settlement.
 - `LoadHistory` (Varandas law): the memory is ``h(F)``, the cycles whose peak reached ``F``,
   on a load grid of `LOAD_GRID` cells. Over a step the wheels interleave, so ``h`` grows
   at ``r(F) = Σ_j n_j [Q_j >= F]`` per MGT and the settlement is
   ``(gamma / M) Σ_cells w_k (S(h_k + r_k ΔM) - S(h_k))``, with ``w_k`` the integral of
   ``F^alpha`` over cell ``k`` and ``S`` the harmonic sum: the per-cycle law summed exactly
   for loads on the grid points (a load inside a cell counts that cell's fraction).
+- `Zoned`: one of these per zone of the track, each on its own sleepers.
+
+Each vehicle's part of a step's settlement is its share of the rate at the step start:
+of the equivalent cycles of a power term, of the consolidation drive of a consolidation
+term, of the cycles reaching each load cell of the Varandas histogram.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from trackdyn.deterioration.settlement import VarandasLaw, harmonic, time_hardening_increment
+from trackdyn.deterioration.settlement import VarandasLaw, harmonic
 
 LOAD_GRID = 500.0
 """Cell width of the load histogram of `LoadHistory` [N]."""
 
 
-class TimeHardening:
-    """Memory of the ``f(Q, k2) g(N)`` laws: the cycles applied per rail and sleeper.
+class Hardening:
+    """Memory of the ``f(Q, k2) g(N)`` laws: each term's state per rail and sleeper.
 
     Parameters
     ----------
@@ -37,37 +41,61 @@ class TimeHardening:
         The law.
     shape : tuple
         (2 rails, sleepers).
+    vehicles : int
+        Vehicles of the traffic (for each one's part of the settlement).
     """
 
-    def __init__(self, law, shape):
-        self.law, self.N = law, np.zeros(shape)
-        self._cycles = np.zeros(shape)
+    def __init__(self, law, shape, vehicles: int):
+        self.law, self.vehicles = law, vehicles
+        self.N = np.zeros(shape)
+        self.states = [term.start(shape) for term in law.terms]
+        self._parts, self._owners, self._cycles = [], [], np.zeros(shape)
+
+    def _classes(self, cycles):
+        """Per wheel: (cycles per MGT, load factor) per rail and sleeper; owners; per MGT."""
+        shape = self.N.shape
+        classes, owners, per_mgt = [], [], np.zeros(shape)
+        for v, r, w, q, k2 in cycles:
+            n, f = np.zeros(shape), np.zeros(shape)
+            n[r], f[r] = w, self.law.load_factor(q, k2)
+            classes.append((n, f))
+            owners.append(v)
+            per_mgt[r] += w
+        return classes, owners, per_mgt
 
     def prepare(self, cycles):
         """Increment [m] as a function of the step [MGT] for ``cycles``.
 
         Parameters
         ----------
-        cycles : list of (int, float, ndarray, ndarray)
-            Per wheel: rail index, cycles per MGT [-], rail-seat load per sleeper [N] and
-            track stiffness per sleeper [N/m].
+        cycles : list of (int, int, float, ndarray, ndarray)
+            Per wheel: vehicle index, rail index, cycles per MGT [-], rail-seat load per
+            sleeper [N] and track stiffness per sleeper [N/m].
         """
-        shape = self.N.shape
-        weighted, per_mgt = np.zeros(shape), np.zeros(shape)
-        for r, w, q, k2 in cycles:
-            weighted[r] += w * self.law.load_factor(q, k2)
-            per_mgt[r] += w
-        factor = np.divide(weighted, per_mgt, out=np.zeros(shape), where=per_mgt > 0)
-        self._cycles = per_mgt
-        N = self.N
-        return lambda dm: time_hardening_increment(self.law, factor, N, per_mgt * dm)
+        classes, self._owners, self._cycles = self._classes(cycles)
+        self._parts = [t.prepare(s, classes) for t, s in zip(self.law.terms, self.states,
+                                                             strict=True)]  # fmt: skip
+        parts = self._parts
+        return lambda dm: sum((inc(dm)[0] for inc, _ in parts), np.zeros(self.N.shape))
 
-    def advance(self, dm: float):
-        """Apply a step of ``dm`` [MGT] with the cycles last prepared."""
+    def advance(self, dm: float) -> np.ndarray:
+        """Apply a step of ``dm`` [MGT] with the cycles last prepared.
+
+        Returns
+        -------
+        ndarray
+            Each vehicle's part of the step's settlement, (vehicles, 2, sleepers) [m].
+        """
+        split = np.zeros((self.vehicles, *self.N.shape))
+        for i, (inc, shares) in enumerate(self._parts):
+            de, self.states[i] = inc(dm)
+            for v, share in zip(self._owners, shares, strict=True):
+                split[v] += share * de
         self.N = self.N + self._cycles * dm
+        return split
 
 
-class LoadHistory(TimeHardening):
+class LoadHistory(Hardening):
     """Memory of the Varandas law: the load histogram ``h(F)`` per rail and sleeper.
 
     Parameters
@@ -76,43 +104,88 @@ class LoadHistory(TimeHardening):
         The law.
     shape : tuple
         (2 rails, sleepers).
+    vehicles : int
+        Vehicles of the traffic.
     """
 
-    def __init__(self, law: VarandasLaw, shape):
-        super().__init__(law, shape)
+    def __init__(self, law: VarandasLaw, shape, vehicles: int):
+        self.law, self.vehicles = law, vehicles
+        self.N = np.zeros(shape)
         self.h = np.zeros((*shape, 0))
-        self._rate = self.h
+        self._rate, self._by_vehicle, self._cycles = self.h, [], np.zeros(shape)
+        self._increment = None
 
     def prepare(self, cycles):
         law, shape = self.law, self.N.shape
-        top = max((float(np.max(q)) for _, _, q, _ in cycles), default=0.0)
+        top = max((float(np.max(c[3])) for c in cycles), default=0.0)
         cells = max(int(np.ceil(top / LOAD_GRID)), self.h.shape[-1])
         self.h = np.pad(self.h, ((0, 0), (0, 0), (0, cells - self.h.shape[-1])))
         edges = np.arange(cells + 1) * LOAD_GRID
-        rate, per_mgt = np.zeros((*shape, cells)), np.zeros(shape)
-        for r, w, q, _ in cycles:
-            rate[r] += w * np.clip((q[:, None] - edges[:-1]) / LOAD_GRID, 0.0, 1.0)
+        rate = np.zeros((self.vehicles, *shape, cells))
+        per_mgt = np.zeros(shape)
+        for v, r, w, q, _ in cycles:
+            rate[v, r] += w * np.clip((q[:, None] - edges[:-1]) / LOAD_GRID, 0.0, 1.0)
             per_mgt[r] += w
-        self._rate, self._cycles = rate, per_mgt
+        total = rate.sum(axis=0)
+        self._rate, self._cycles = total, per_mgt
         a = law.alpha + 1
         weight = np.diff(edges**a) / a
-        on = np.nonzero(rate > 0)
-        h, rk, wk = self.h[on], rate[on], weight[on[-1]]
+        on = np.nonzero(total > 0)
+        h, rk, wk = self.h[on], total[on], weight[on[-1]]
+        shares = rate[(slice(None), *on)] / rk
         flat = np.ravel_multi_index(on[:2], shape)
         base = harmonic(h, law.beta)
         scale = law.gamma / law.M
 
-        def increment(dm):
-            each = wk * (harmonic(h + rk * dm, law.beta) - base)
-            return scale * np.bincount(flat, each, minlength=self.N.size).reshape(shape)
+        def each(dm):
+            return scale * wk * (harmonic(h + rk * dm, law.beta) - base)
 
-        return increment
+        def to_seats(values):
+            return np.bincount(flat, values, minlength=self.N.size).reshape(shape)
 
-    def advance(self, dm: float):
-        super().advance(dm)
+        self._increment = lambda dm: np.array([to_seats(s * each(dm)) for s in shares])
+        return lambda dm: to_seats(each(dm))
+
+    def advance(self, dm: float) -> np.ndarray:
+        split = self._increment(dm)
+        self.N = self.N + self._cycles * dm
         self.h = self.h + self._rate * dm
+        return split
 
 
-def memory(law, shape) -> TimeHardening:
-    """The accumulator for ``law``: `LoadHistory` for the Varandas law, else `TimeHardening`."""
-    return LoadHistory(law, shape) if isinstance(law, VarandasLaw) else TimeHardening(law, shape)
+def memory(law, shape, vehicles: int) -> Hardening:
+    """The accumulator for ``law``: `LoadHistory` for the Varandas law, else `Hardening`."""
+    kind = LoadHistory if isinstance(law, VarandasLaw) else Hardening
+    return kind(law, shape, vehicles)
+
+
+class Zoned:
+    """One accumulator per zone, each applying to its own rail seats.
+
+    Parameters
+    ----------
+    laws : list of (ndarray, LawParameters)
+        Per zone: which sleepers it holds (bool, per sleeper) and its law.
+    shape : tuple
+        (2 rails, sleepers).
+    vehicles : int
+        Vehicles of the traffic.
+    """
+
+    def __init__(self, laws, shape, vehicles: int):
+        self.parts = [(np.broadcast_to(m, shape), memory(law, shape, vehicles))
+                      for m, law in laws]  # fmt: skip
+
+    @property
+    def N(self) -> np.ndarray:
+        """Load cycles applied per rail and sleeper [-]."""
+        return self.parts[0][1].N
+
+    def prepare(self, cycles):
+        """See `Hardening.prepare`."""
+        incs = [(m, acc.prepare(cycles)) for m, acc in self.parts]
+        return lambda dm: sum(np.where(m, inc(dm), 0.0) for m, inc in incs)
+
+    def advance(self, dm: float) -> np.ndarray:
+        """See `Hardening.advance`."""
+        return sum(np.where(m, acc.advance(dm), 0.0) for m, acc in self.parts)

@@ -37,7 +37,7 @@ import numpy as np
 from trackdyn.deterioration.calibration_spec import CalibrationScenario
 from trackdyn.deterioration.law_files import law_bounds, law_units
 from trackdyn.deterioration.scenario import loop_options, resolve_inputs
-from trackdyn.deterioration.sections import Section, SectionTask, run_sections
+from trackdyn.deterioration.sections import Section, SectionTask, run_section, run_sections
 from trackdyn.deterioration.surveys import (
     REFINE,
     align,
@@ -228,7 +228,8 @@ def prepare(spec: CalibrationScenario, base: Path) -> Problem:
                    options, fit_options)  # fmt: skip
 
 
-def run_laws(problem: Problem, laws, options, *, workers=None, scheduler=None) -> list:
+def run_laws(problem: Problem, laws, options, *, workers=None, scheduler=None,
+             keep_failures: bool = False) -> list:  # fmt: skip
     """One deterioration run per law on the first survey, as one batch of Dask tasks.
 
     Parameters
@@ -243,9 +244,16 @@ def run_laws(problem: Problem, laws, options, *, workers=None, scheduler=None) -
         Worker processes (default one per core; 1 runs in this process).
     scheduler : str, optional
         Address of a running Dask scheduler.
+    keep_failures : bool
+        Return a failed run's one-line message in its place instead of raising.
     """
     tasks = [SectionTask(problem.section, problem.traffic, law, options) for law in laws]
-    return run_sections(tasks, workers=workers, scheduler=scheduler)
+    if not keep_failures:
+        return run_sections(tasks, workers=workers, scheduler=scheduler)
+    from trackdyn.parallel import run_tasks
+
+    results = run_tasks(tasks, run_section, workers=workers, scheduler=scheduler, label="runs")
+    return [r.get("dataset", r.get("error")) for r in results]
 
 
 @dataclass(frozen=True)

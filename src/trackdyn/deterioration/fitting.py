@@ -26,6 +26,11 @@ from trackdyn.deterioration.calibrate import (
     residuals,
     run_laws,
 )
+from trackdyn.errors import TrackdynInputError
+
+FAILED_RUN_MM = 100.0
+"""Residual given to every comparison point of a trial whose run failed (settlement that
+ran away past the plausible profile, too many steps) [mm]: the optimiser steps back."""
 
 MAD_SCALE = 1.4826
 """Median absolute deviation to standard deviation of a normal distribution [-]."""
@@ -64,9 +69,20 @@ class Objective:
             return
         laws = [self.problem.law_at(p) for p in todo]
         runs = run_laws(self.problem, laws, self.problem.fit_options, workers=self.workers,
-                        scheduler=self.scheduler)  # fmt: skip
+                        scheduler=self.scheduler, keep_failures=True)  # fmt: skip
+        if self.runs == 0 and isinstance(runs[0], str):
+            raise TrackdynInputError(f"the run at the starting values failed: {runs[0]}")
+        failed = []
         for p, ds in zip(todo, runs, strict=True):
-            self.cache[_key(p)] = residuals(self.problem, compare(self.problem, ds))
+            if isinstance(ds, str):
+                failed.append((p, ds))
+            else:
+                self.cache[_key(p)] = residuals(self.problem, compare(self.problem, ds))
+        for p, ds in failed:  # trials the optimiser must step back from
+            size = next(iter(self.cache.values())).size
+            self.cache[_key(p)] = np.full(size, FAILED_RUN_MM)
+            if self.log:
+                self.log(f"a run failed and counts as a misfit of {FAILED_RUN_MM:g} mm: {ds}")
         self.runs += len(todo)
         if self.log:
             rms = np.sqrt(np.mean(self.cache[_key(theta)] ** 2))

@@ -10,6 +10,14 @@ K_s = { value = 0.5, unit = "mm", source = "...", min = 0.05, max = 5 }
 "illustrative"), and optionally ``min`` and ``max`` in the same unit: the range
 `trackdyn calibrate` may fit the parameter in. The shipped file (`DEFAULT_FILE`) holds
 illustrative values that are not calibrated.
+
+A law's table may hold one sub-table per zone kind (`trackdyn.deterioration.zones`) with
+the parameters that differ there, each again with value, unit and source::
+
+    [power.structure]
+    K_s = { value = 0.15, unit = "mm", source = "..." }
+
+``open`` is the law's own table.
 """
 
 from __future__ import annotations
@@ -29,7 +37,13 @@ BOUNDS = ("min", "max")
 
 
 def _law_table(name: str, path) -> tuple[type[LawParameters], dict, str]:
-    """The law's class, its ``[name]`` table from the parameter file, and the file's name."""
+    """The law's class, its ``[name]`` table from the parameter file (without the zone
+    kinds' sub-tables), and the file's name."""
+    cls, table, where = _full_table(name, path)
+    return cls, {k: v for k, v in table.items() if k not in zone_kinds(name, path)}, where
+
+
+def _full_table(name: str, path) -> tuple[type[LawParameters], dict, str]:
     if name not in LAWS:
         raise TrackdynInputError(f"unknown settlement law {name!r}; known: {', '.join(LAWS)}")
     where = str(path) if path is not None else "settlement.toml (shipped)"
@@ -37,6 +51,25 @@ def _law_table(name: str, path) -> tuple[type[LawParameters], dict, str]:
     if name not in data or not isinstance(data[name], dict):
         raise TrackdynInputError(f"{where}: no table [{name}] for the {name} law")
     return LAWS[name], data[name], where
+
+
+def zone_kinds(name: str, path=None) -> list[str]:
+    """The zone kinds with a sub-table ``[name.<kind>]`` in the parameter file, and open.
+
+    Parameters
+    ----------
+    name : str
+        Law name, a key of `LAWS`.
+    path : path, optional
+        Parameter file; default the shipped illustrative file.
+    """
+    _, table, _ = _full_table(name, path)
+    expected = law_units(name)
+    return ["open"] + [
+        k
+        for k, v in table.items()
+        if k not in expected and isinstance(v, dict) and "value" not in v
+    ]
 
 
 def law_units(name: str) -> dict[str, str]:
@@ -92,7 +125,7 @@ def law_bounds(name: str, path=None) -> dict[str, tuple[float, float]]:
     return bounds
 
 
-def load_law(name: str, path=None, **overrides) -> LawParameters:
+def load_law(name: str, path=None, kind: str = "open", **overrides) -> LawParameters:
     """A settlement law with parameters from a TOML file.
 
     Parameters
@@ -103,28 +136,40 @@ def load_law(name: str, path=None, **overrides) -> LawParameters:
         Parameter file with a table ``[<name>]`` whose entries are tables with ``value``,
         ``unit`` and ``source`` (optionally ``min`` and ``max``, see `law_bounds`); default
         the shipped illustrative file.
+    kind : str
+        Zone kind (`trackdyn.deterioration.zones`): ``open`` (the law's table), or a kind
+        whose sub-table ``[<name>.<kind>]`` replaces some of the parameters.
     **overrides : float
-        Parameter values replacing the file's [SI units].
+        Parameter values replacing the file's [SI units] (for every kind).
     """
     cls, table, where = _law_table(name, path)
+    if kind != "open":
+        kinds = zone_kinds(name, path)
+        if kind not in kinds:
+            raise TrackdynInputError(
+                f"{where}: no table [{name}.{kind}] for zones of kind {kind!r}; known kinds: "
+                + ", ".join(kinds)
+            )
+        table = {**table, **_full_table(name, path)[1][kind]}
+    label = f"[{name}]" if kind == "open" else f"[{name}.{kind}]"
     expected = law_units(name)
     values = {}
     for key, entry in table.items():
         if key == "description":
             continue
         if key not in expected:
-            raise TrackdynInputError(f"{where}: [{name}] unknown parameter {key!r}")
+            raise TrackdynInputError(f"{where}: {label} unknown parameter {key!r}")
         if isinstance(entry, dict):
             entry = {k: v for k, v in entry.items() if k not in BOUNDS}
-        values[key] = si_value(entry, key, expected[key], f"{where}: [{name}]")
+        values[key] = si_value(entry, key, expected[key], f"{where}: {label}")
     unknown = sorted(set(overrides) - set(expected))
     if unknown:
         raise TrackdynInputError(f"unknown settlement parameter {unknown[0]!r} for {name}")
     values.update({k: float(v) for k, v in overrides.items()})
     missing = [k for k in expected if k not in values]
     if missing:
-        raise TrackdynInputError(f"{where}: [{name}] missing parameter {missing[0]}")
+        raise TrackdynInputError(f"{where}: {label} missing parameter {missing[0]}")
     try:
         return cls(**values)
     except TrackdynInputError as exc:
-        raise TrackdynInputError(f"{where}: [{name}] {exc}") from None
+        raise TrackdynInputError(f"{where}: {label} {exc}") from None

@@ -114,10 +114,12 @@ class TrafficRun:
         The measured track linearised about the vehicle's static wheel load.
     options : LoopOptions
         Model, time step, linearisation increment and output spacing.
+    vehicle : int
+        Index of the vehicle in the traffic mix.
     """
 
-    def __init__(self, traffic, lin: LinearisedTrack, options):
-        self.traffic, self.lin, self.options = traffic, lin, options
+    def __init__(self, traffic, lin: LinearisedTrack, options, vehicle: int = 0):
+        self.traffic, self.lin, self.options, self.vehicle = traffic, lin, options, vehicle
         self.model = build_model(options.run.model, traffic.vehicle)
         self.weights = cycles_per_passage(self.model) * traffic.passages_per_mgt
         self.rails = [RAILS.index(r) for _, _, r in wheels(self.model)]
@@ -126,13 +128,12 @@ class TrafficRun:
         self.run = options.run.with_(speed_kmh=traffic.speed * 3.6, dt_s=dt, store_every=every)
 
 
-def passages(runs, lins: list[LinearisedTrack], ballast, state, timing: dict) -> list:
-    """Load cycles of one passage of each vehicle, (wheels, sleepers) [N] per run.
+def vehicle_runs(runs, lins: list[LinearisedTrack], timing: dict) -> list:
+    """Run every vehicle of the traffic once over the track as it stands.
 
-    The vehicles run side by side in one batch (`trackdyn.simulation.simulate_batch`), each
-    over its own linearisation of the track as it stands; their wheel loads then go onto
-    the rail beam on ``state`` (`passage_loads`). Adds the seconds spent to
-    ``timing["vehicle"]`` and ``timing["beam"]``.
+    The vehicles run side by side in one batch (`trackdyn.simulation.simulate_batch`),
+    each over its own linearisation of the track. Adds the seconds spent to
+    ``timing["vehicle"]``.
 
     Parameters
     ----------
@@ -140,12 +141,13 @@ def passages(runs, lins: list[LinearisedTrack], ballast, state, timing: dict) ->
         The traffic.
     lins : list of LinearisedTrack
         The current track linearised about each run's static wheel load.
-    ballast : Ballast
-        The ballast model of the section.
-    state : BallastState
-        Its current state (gaps, rest deflection).
     timing : dict
         Seconds spent so far, by part.
+
+    Returns
+    -------
+    list of xarray.Dataset
+        One result per run (`trackdyn.simulation.simulate`).
     """
     if not runs:
         return []
@@ -153,11 +155,33 @@ def passages(runs, lins: list[LinearisedTrack], ballast, state, timing: dict) ->
     vehicles = [run.traffic.vehicle for run in runs]
     datasets = simulate_batch(vehicles, list(lins), [run.run for run in runs])
     timing["vehicle"] += time.perf_counter() - clock
-    clock = time.perf_counter()
-    loads = []
-    for run, ds in zip(runs, datasets, strict=True):
+    for ds in datasets:
         if isinstance(ds, Exception):
             raise ds
-        loads.append(passage_loads(ds, ballast, state, run.model))
+    return datasets
+
+
+def rail_seat_loads(runs, datasets, ballast, state, timing: dict) -> list:
+    """Load cycles of one passage of each vehicle, (wheels, sleepers) [N] per run.
+
+    The wheel loads of each run go onto the rail beam on ``state`` (`passage_loads`).
+    Adds the seconds spent to ``timing["beam"]``.
+
+    Parameters
+    ----------
+    runs : list of TrafficRun
+        The traffic.
+    datasets : list of xarray.Dataset
+        Their results (`vehicle_runs`).
+    ballast : Ballast
+        The ballast model of the section.
+    state : BallastState
+        Its current state (gaps, rest deflection).
+    timing : dict
+        Seconds spent so far, by part.
+    """
+    clock = time.perf_counter()
+    loads = [passage_loads(ds, ballast, state, run.model)
+             for run, ds in zip(runs, datasets, strict=True)]  # fmt: skip
     timing["beam"] += time.perf_counter() - clock
     return loads

@@ -11,13 +11,20 @@ ballast (hanging where it cannot reach), and the next step starts from there.
 
 Mixed traffic: in a step of ``ΔM`` MGT each wheel of each vehicle applies its passages per
 MGT times ``ΔM`` cycles at every sleeper of its rail, with the load it had there at the
-step start; see `trackdyn.deterioration.accumulation` for how each law sums them.
+step start; see `trackdyn.deterioration.accumulation` for how each law sums them (every
+cycle adds settlement; each vehicle's part is recorded). Zones
+(`trackdyn.deterioration.zones`) give parts of the track their own law and rate field.
 
-The step adapts so that no sleeper settles more than ``max_step_settlement`` in it, nor
-more than its stable step (`stable_settlement`): with the loads of the step start, the
-increment is known in closed form for any ``ΔM``, so the step is the largest one within
-the limits (found by root finding), cut to land on the snapshot tonnages and on
-``total_mgt``.
+Two step sizes. A step (a vehicle run) is as long as ``max_step_settlement`` allows: with
+the loads of the step start, the increment is known in closed form for any ``ΔM``, so the
+step is the largest one within the limit (found by root finding), cut to land on the
+snapshot tonnages and on ``total_mgt``; the first is at least one train
+(``min_step_passages`` passages of the traffic mix) unless that train alone would settle a
+sleeper by more than `TRAIN_ALLOWANCE` times the limit. Within a step, the dynamic wheel loads of
+the run stay and the rail beam redistributes them as the ballast settles: the rail-seat
+loads are updated as often as each sleeper's stable step (`stable_settlement`) needs.
+A law that follows the load steeply, a soft spot or the first train after tamping then
+costs beam solves, not vehicle runs.
 
 The stable step. A sleeper whose ballast sinks ``δ`` more than its neighbours' sheds load
 ``kd δ`` to them (the rail, far stiffer against a sleeper-to-sleeper pattern than the
@@ -25,9 +32,10 @@ support ``kd``, does not follow). With settlement ``e ∝ Q^s`` (``s`` the law's
 `load_sensitivity`), the next step's increment there falls by ``g δ`` with
 ``g = s kd e / Q``: for ``g > 1`` the explicit step overshoots and settlement alternates
 from sleeper to sleeper, for ``g > 2`` the alternation grows. Each sleeper's increment is
-kept to ``e <= STABLE_GAIN Q / (s kd)`` (measured on the built-in example: a 1 mm limit
-reached ``g`` = 1.9 and gave the settlement of a 0.25 mm limit; a 2 mm limit reached ``g`` =
-3.5 and doubled the largest sleeper-to-sleeper step of the settlement at 20 MGT).
+kept to ``e <= STABLE_GAIN Q / (s kd)`` between load updates (measured on the built-in
+example before the updates within a step: a 1 mm limit reached ``g`` = 1.9 and gave the
+settlement of a 0.25 mm limit; a 2 mm limit reached ``g`` = 3.5 and doubled the largest
+sleeper-to-sleeper step of the settlement at 20 MGT).
 
 References
 ----------
@@ -48,12 +56,13 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from trackdyn.deterioration.accumulation import memory
+from trackdyn.deterioration.accumulation import Zoned
 from trackdyn.deterioration.ballast import Ballast, rate_field
-from trackdyn.deterioration.loads import TrafficRun, passages
+from trackdyn.deterioration.loads import TrafficRun, rail_seat_loads, vehicle_runs
 from trackdyn.deterioration.results import d1_sd, make_dataset
 from trackdyn.deterioration.surveys import surveyed_geometry
 from trackdyn.deterioration.tamping import STARTS, tamped_geometry
+from trackdyn.deterioration.zones import check_zones
 from trackdyn.errors import TrackdynInputError, require_positive, shown
 from trackdyn.options import RunOptions
 from trackdyn.progress import progress_bar
@@ -136,6 +145,9 @@ class LoopOptions:
     snapshot_mgt : tuple of float
         Further tonnages at which to store a geometry snapshot, e.g. those of surveys
         [MGT]; those beyond ``total_mgt`` are ignored.
+    min_step_passages : float
+        Shortest first step, in passages of the traffic mix [-]: one train; default 100
+        (illustrative: a coal train of 100 wagons; the Richards Bay line runs 200).
     """
 
     total_mgt: float = 50.0
@@ -153,6 +165,7 @@ class LoopOptions:
     output_spacing: float = 0.02
     start: str = "as measured"
     snapshot_mgt: tuple[float, ...] = ()
+    min_step_passages: float = 100.0
 
 
 STABLE_GAIN = 1.0
@@ -182,6 +195,14 @@ def stable_settlement(peak, stiffness, sensitivity: float) -> np.ndarray:
                      where=(gain > 0) & (peak > 0))  # fmt: skip
 
 
+TRAIN_ALLOWANCE = 10.0
+"""How far one train may exceed ``max_step_settlement`` before the loop re-runs the vehicles
+within it [-]: a train that settles a sleeper 10 times the limit (5 mm by default)
+changes its own wheel loads too much to keep them over the train."""
+
+MAX_LOAD_UPDATES = 2000
+"""Rail-seat load updates allowed within one step (each a beam solve) before giving up."""
+
 NO_TRAFFIC_LOAD = 100e3
 """Static wheel load the beam is set up for when no vehicle runs [N] (nothing settles)."""
 
@@ -207,7 +228,7 @@ def step_size(increment, cap: float, limit) -> float:
     return brentq(excess, 0.0, cap, xtol=1e-14 * cap, rtol=1e-12)
 
 
-def predict(track: Track, traffic, law, options=None, *, progress=False):
+def predict(track: Track, traffic, law, options=None, *, zones=(), progress=False):
     """Predict settlement and geometry of a track section over accumulated tonnage.
 
     Parameters
@@ -220,6 +241,9 @@ def predict(track: Track, traffic, law, options=None, *, progress=False):
         Settlement law with its parameters (`trackdyn.deterioration.settlement.LAWS`).
     options : LoopOptions, optional
         Loop options; default `LoopOptions()`.
+    zones : sequence of Zone
+        Parts of the track with their own law and rate field
+        (`trackdyn.deterioration.zones`); the rest is open track with ``law``.
     progress : bool
         Show a progress bar over the tonnage.
 
@@ -233,6 +257,7 @@ def predict(track: Track, traffic, law, options=None, *, progress=False):
     total = float(require_positive("total_mgt", o.total_mgt))
     limit = float(require_positive("max_step_settlement", o.max_step_settlement))
     every = float(require_positive("snapshot_every_mgt", o.snapshot_every_mgt))
+    require_positive("min_step_passages", o.min_step_passages)
     d1_sd(track.geometry, track.extent, o.segment_length)  # refuses too short a section now
     if o.start not in STARTS:
         raise TrackdynInputError(f"start must be one of {', '.join(STARTS)}; got {o.start!r}")
@@ -244,9 +269,19 @@ def predict(track: Track, traffic, law, options=None, *, progress=False):
         track = dataclasses.replace(track, geometry=surveyed_geometry(track.geometry))
     pos = track.supports.position
     shape = (len(RAILS), pos.size)
-    rate = rate_field(pos.size, float(np.median(np.diff(pos))), o.rate_cov,
-                      o.rate_correlation_length, o.seed)  # fmt: skip
+    check_zones(zones, (float(pos[0]), float(pos[-1])))
+    spacing = float(np.median(np.diff(pos)))
+    rate = rate_field(pos.size, spacing, o.rate_cov, o.rate_correlation_length, o.seed)
+    for z in zones:
+        if z.rate is not None:
+            own = rate_field(pos.size, spacing, z.rate.cov, z.rate.correlation_length,
+                             z.rate.seed)  # fmt: skip
+            rate = np.where(z.holds(pos), own, rate)
+    laws = _zone_laws(law, zones, pos)
+    sensitivity = sum(m * lw.load_sensitivity for m, lw in laws)
     runs, lins = _runs(track, traffic, o)
+    per_mgt = sum(t.passages_per_mgt for t in traffic)
+    shortest = o.min_step_passages / per_mgt if per_mgt > 0 else 0.0
     base = (
         lins[max(lins)]
         if lins
@@ -257,13 +292,14 @@ def predict(track: Track, traffic, law, options=None, *, progress=False):
     ballast = Ballast(base, rail_section(o.rail), o.sleeper_mass, seated=seated)
     state = ballast.initial
     timing["beam"] += time.perf_counter() - clock
-    acc = memory(law, shape)
+    acc = Zoned(laws, shape, len(traffic))
+    by_vehicle = np.zeros((len(traffic), *shape))
     extra = [float(m) for m in o.snapshot_mgt if 0.0 < m < total]
     snap_at = np.unique(np.concatenate([np.arange(0.0, total, every), extra, [total]]))
     level, mgt, geometry = np.zeros(shape), 0.0, track.geometry
     history = {"mgt": [0.0], "settlement": [level], "geometry": [geometry],
                "hanging_gap": [state.hanging_gap]}  # fmt: skip
-    steps = {"start": [], "end": [], "peak_load": [], "max_settlement": []}
+    steps = {"start": [], "end": [], "peak_load": [], "max_settlement": [], "load_updates": []}
     with progress_bar(progress, total, "tonnage [MGT]") as bar:
         while mgt < total:
             if len(steps["start"]) >= o.max_steps:
@@ -274,44 +310,88 @@ def predict(track: Track, traffic, law, options=None, *, progress=False):
             clock = time.perf_counter()
             current = {p: ballast.linearised(lin, state, geometry) for p, lin in lins.items()}
             timing["beam"] += time.perf_counter() - clock
-            cycles, peak = [], np.zeros(shape)
             step_lins = [current[run.lin.static_load] for run in runs]
-            for run, lin, loads in zip(
-                runs, step_lins, passages(runs, step_lins, ballast, state, timing), strict=True
-            ):
-                for q, r, w in zip(loads, run.rails, run.weights, strict=True):
-                    cycles.append((r, w, q, lin.k2[r]))
-                    peak[r] = np.maximum(peak[r], q)
-            increment = acc.prepare(cycles)
+            datasets = vehicle_runs(runs, step_lins, timing)
             target = snap_at[np.searchsorted(snap_at, mgt, side="right")]
-            stable = stable_settlement(peak, ballast.stiffness, law.load_sensitivity)
-            dm = step_size(lambda d, inc=increment: rate * inc(d), target - mgt,
-                           np.minimum(limit, stable))  # fmt: skip
-            de = rate * increment(dm)
-            acc.advance(dm)
-            level = level + de
+            start_level, span, moved, updates = level, None, 0.0, 0
+            while span is None or span - moved > 1e-12 * span:
+                if updates >= MAX_LOAD_UPDATES:
+                    raise TrackdynInputError(
+                        f"more than {MAX_LOAD_UPDATES} load updates needed in one step at "
+                        f"{mgt:.3g} MGT: the settlement law follows the load too steeply for a "
+                        "stable step; check its load exponent"
+                    )
+                loads = rail_seat_loads(runs, datasets, ballast, state, timing)
+                cycles, peak = _cycles(runs, step_lins, loads, shape)
+                settle = _scaled(rate, acc.prepare(cycles))
+                if span is None:  # the accuracy limit, and at least one train
+                    span = step_size(settle, target - mgt, limit)
+                    train = min(shortest, target - mgt)
+                    if mgt == 0.0 and span < train:
+                        span = step_size(settle, train, TRAIN_ALLOWANCE * limit)
+                    step_peak = peak
+                stable = stable_settlement(peak, ballast.stiffness, sensitivity)
+                dm = step_size(settle, span - moved, stable)
+                level = level + settle(dm)
+                by_vehicle += rate * acc.advance(dm)
+                moved, updates = moved + dm, updates + 1
+                clock = time.perf_counter()
+                state = ballast.state(level, state)
+                timing["beam"] += time.perf_counter() - clock
             clock = time.perf_counter()
-            state = ballast.state(level, state)
             geometry = ballast.geometry(track.geometry, state)
             timing["beam"] += time.perf_counter() - clock
             steps["start"].append(mgt)
-            mgt = target if target - (mgt + dm) <= 1e-12 * total else mgt + dm
+            mgt = target if target - (mgt + span) <= 1e-12 * total else mgt + span
             steps["end"].append(mgt)
-            steps["peak_load"].append(peak)
-            steps["max_settlement"].append(float(de.max()))
+            steps["peak_load"].append(step_peak)
+            steps["max_settlement"].append(float((level - start_level).max()))
+            steps["load_updates"].append(updates)
             for key, value in (("mgt", mgt), ("settlement", level), ("geometry", geometry),
                                ("hanging_gap", state.hanging_gap)):  # fmt: skip
                 history[key].append(value)
             bar.update(mgt)
     timing["total"] = time.perf_counter() - t0
-    return make_dataset(track, history, steps, snap_at, acc.N, rate, timing, traffic, law, o)
+    record = {"cycles": acc.N, "rate": rate, "by_vehicle": by_vehicle,
+              "kind": _kinds(zones, pos)}  # fmt: skip
+    return make_dataset(track, history, steps, snap_at, record, timing, traffic, law, o)
+
+
+def _cycles(runs, lins, loads, shape):
+    """The step's load cycles for `Zoned.prepare`, and the largest load per rail seat [N]."""
+    cycles, peak = [], np.zeros(shape)
+    for run, lin, per_wheel in zip(runs, lins, loads, strict=True):
+        for q, r, w in zip(per_wheel, run.rails, run.weights, strict=True):
+            cycles.append((run.vehicle, r, w, q, lin.k2[r]))
+            peak[r] = np.maximum(peak[r], q)
+    return cycles, peak
+
+
+def _scaled(rate, increment):
+    """The settlement increment [m] against the step [MGT], times the rate field."""
+    return lambda dm: rate * increment(dm)
+
+
+def _zone_laws(law, zones, position) -> list:
+    """(sleepers, law) of the open track and of each zone."""
+    held = [z.holds(position) for z in zones]
+    rest = ~np.any(held, axis=0) if held else np.ones(position.size, dtype=bool)
+    return [(rest, law)] + [(h, z.law) for h, z in zip(held, zones, strict=True)]
+
+
+def _kinds(zones, position) -> np.ndarray:
+    """The zone kind of each sleeper (``open`` outside every zone)."""
+    kind = np.full(position.size, "open", dtype=object)
+    for z in zones:
+        kind[z.holds(position)] = z.kind
+    return kind.astype(str)
 
 
 def _runs(track: Track, traffic, o: LoopOptions):
     """One `TrafficRun` per vehicle with traffic, and the measured track linearised once
     per static wheel load ({load [N]: LinearisedTrack})."""
     lins, runs = {}, []
-    for t in traffic:
+    for i, t in enumerate(traffic):
         if not 0 <= t.passages_per_mgt < np.inf:
             raise TrackdynInputError(
                 f"passages_per_mgt must be >= 0, got {shown(t.passages_per_mgt)}"
@@ -321,5 +401,5 @@ def _runs(track: Track, traffic, o: LoopOptions):
             load = t.vehicle.static_wheel_load
             if load not in lins:
                 lins[load] = track.linearise(load, o.run.delta, extrapolate=o.run.extrapolate)
-            runs.append(TrafficRun(t, lins[load], o))
+            runs.append(TrafficRun(t, lins[load], o, vehicle=i))
     return runs, lins

@@ -68,22 +68,24 @@ def trigger_mgt(mgt, sd, threshold: float):
     return out
 
 
-def make_dataset(
-    track, history, steps, snap_at, cycles, rate, timing, traffic, law, options
-) -> xr.Dataset:
+def make_dataset(track, history, steps, snap_at, record, timing, traffic, law,
+                 options) -> xr.Dataset:  # fmt: skip
     """Assemble the loop's record into a Dataset with units in the attributes.
 
     Variables: ``settlement`` (mgt, rail, sleeper) [m], ballast settlement under each
     rail seat, positive down; ``hanging_gap`` (mgt, rail, sleeper) [m], the gap under each
     sleeper with the rail at rest (0 where it bears); ``hanging_sleepers`` (mgt, rail),
     sleepers with a gap over `HANGING_GAP`; ``rate_factor`` (rail, sleeper) [-], the
-    settlement-rate factor; ``d1_sd`` (mgt, rail,
-    segment) [mm]; ``trigger_mgt`` (rail, segment) [MGT], when the D1 SD first reaches
+    settlement-rate factor; ``zone_kind`` (sleeper), the zone each sleeper lies in;
+    ``settlement_by_vehicle`` (vehicle, rail, sleeper) [m], each vehicle's part of the
+    final settlement; ``d1_sd`` (mgt, rail, segment) [mm]; ``trigger_mgt`` (rail,
+    segment) [MGT], when the D1 SD first reaches
     ``threshold_sd_mm`` (inf: not within the horizon), and ``trigger_mgt_any_rail``
     (segment); ``profile`` (snapshot, rail, distance) [m], the unloaded space curve at the
     snapshot tonnages; ``load_cycles`` (rail, sleeper) [-], cycles applied in total;
-    per step: ``step_start``, ``step_end`` [MGT], ``step_max_settlement`` [m] and
-    ``peak_rail_seat_load`` (step, rail, sleeper) [N], the largest load of the step.
+    per step: ``step_start``, ``step_end`` [MGT], ``step_max_settlement`` [m],
+    ``step_load_updates``, the rail-seat load updates within it, and
+    ``peak_rail_seat_load`` (step, rail, sleeper) [N], the largest load at its start.
 
     Parameters
     ----------
@@ -93,13 +95,15 @@ def make_dataset(
         ``mgt`` [MGT], ``settlement`` [m], ``geometry`` and ``hanging_gap`` [m] after each
         step, initial first.
     steps : dict
-        ``start``, ``end`` [MGT], ``peak_load`` [N] and ``max_settlement`` [m] per step.
+        ``start``, ``end`` [MGT], ``peak_load`` [N], ``max_settlement`` [m] and
+        ``load_updates`` per step.
     snap_at : ndarray
         Snapshot tonnages, each one of ``history["mgt"]`` [MGT].
-    cycles : ndarray
-        Load cycles applied per rail and sleeper [-].
-    rate : ndarray
-        Settlement-rate factor per rail and sleeper [-].
+    record : dict
+        ``cycles``, load cycles applied per rail and sleeper [-]; ``rate``, the
+        settlement-rate factor per rail and sleeper [-]; ``by_vehicle``, each vehicle's
+        part of the settlement (vehicle, rail, sleeper) [m]; ``kind``, the zone kind per
+        sleeper.
     timing : dict
         Seconds spent in ``vehicle`` runs, ``beam`` solves and in ``total``.
     traffic : sequence of Traffic
@@ -160,16 +164,31 @@ def make_dataset(
             ),
             "rate_factor": (
                 ("rail", "sleeper"),
-                rate,
+                record["rate"],
                 {"units": "1", "long_name": "settlement-rate factor of the ballast"},
             ),
-            "load_cycles": (("rail", "sleeper"), cycles, {"units": "1"}),
+            "zone_kind": ("sleeper", record["kind"], {"long_name": "zone of the track"}),
+            "settlement_by_vehicle": (
+                ("vehicle", "rail", "sleeper"),
+                record["by_vehicle"],
+                {
+                    "units": "m",
+                    "long_name": "each vehicle's part of the settlement",
+                    "positive": "down",
+                },
+            ),
+            "load_cycles": (("rail", "sleeper"), record["cycles"], {"units": "1"}),
             "step_start": ("step", np.array(steps["start"]), {"units": "MGT"}),
             "step_end": ("step", np.array(steps["end"]), {"units": "MGT"}),
             "step_max_settlement": (
                 "step",
                 np.array(steps["max_settlement"]),
                 {"units": "m", "long_name": "largest settlement of any sleeper in the step"},
+            ),
+            "step_load_updates": (
+                "step",
+                np.array(steps["load_updates"], dtype=int),
+                {"units": "1", "long_name": "rail-seat load updates (beam solves) in the step"},
             ),
             "peak_rail_seat_load": (
                 ("step", "rail", "sleeper"),
@@ -180,6 +199,7 @@ def make_dataset(
         coords={
             "mgt": ("mgt", mgt, {"units": "MGT", "long_name": "accumulated traffic"}),
             "rail": list(RAILS),
+            "vehicle": [t.label or t.vehicle.name for t in traffic],
             "sleeper_distance": ("sleeper", pos, {"units": "m"}),
             "distance": ("distance", g0.distance, {"units": "m"}),
             "snapshot_mgt": ("snapshot", mgt[snap_index], {"units": "MGT"}),

@@ -32,11 +32,13 @@ snapshot_every_mgt = 10
 threshold_sd_mm = 1.6           # D1 SD that triggers maintenance (illustrative)
 segment_length_m = 200
 max_steps = 1000
+min_step_passages = 100         # the first step: one train (illustrative)
 
 [track]                         # omit for the built-in example section
 geometry = "geometry.csv"
 supports = "supports.csv"
-# sections = "sections.csv"     # or a list of sections: name,geometry,supports
+# sections = "sections.csv"     # or a list of sections: name,geometry,supports[,zones]
+# zones = "zones.csv"           # start_m,end_m,kind: open, structure, approach or your own
 rail = "60E1"                   # rail section for the load distribution (EI)
 start = "as measured"           # or "tamped", or "as surveyed" (wavelengths < 3 m removed);
                                 # default: tamped for the built-in example, as measured
@@ -113,7 +115,8 @@ class SettlementSpec(Strict):
 class LoopSpec(Strict):
     """``[loop]``: ``total_mgt`` [MGT], ``max_step_settlement_mm`` [mm],
     ``snapshot_every_mgt`` [MGT], ``threshold_sd_mm`` [mm] (D1 SD of maintenance),
-    ``segment_length_m`` [m], ``max_steps``."""
+    ``segment_length_m`` [m], ``max_steps``, ``min_step_passages`` [-] (the first step:
+    one train)."""
 
     total_mgt: PositiveFloat = 50.0
     max_step_settlement_mm: PositiveFloat = 0.5
@@ -121,17 +124,20 @@ class LoopSpec(Strict):
     threshold_sd_mm: PositiveFloat = 1.6
     segment_length_m: PositiveFloat = 200.0
     max_steps: PositiveInt = 1000
+    min_step_passages: PositiveFloat = 100.0
 
 
 class TrackSectionsSpec(Strict):
     """``[track]``: ``geometry`` and ``supports`` CSV files, or a ``sections`` CSV list;
-    ``rail`` section for the bending stiffness EI; ``start``, ``"tamped"``, ``"as
+    ``zones``, a zone table (`trackdyn.deterioration.zones`; in a sections list, its
+    ``zones`` column); ``rail`` section for the bending stiffness EI; ``start``, ``"tamped"``, ``"as
     measured"`` or ``"as surveyed"`` (default: tamped for the built-in example, as
     measured for files)."""
 
     geometry: Path | None = None
     supports: Path | None = None
     sections: Path | None = None
+    zones: Path | None = None
     rail: str = "60E1"
     start: Literal["tamped", "as measured", "as surveyed"] | None = None
 
@@ -139,6 +145,8 @@ class TrackSectionsSpec(Strict):
     def _one_source(self):
         if self.sections is not None and (self.geometry or self.supports):
             raise ValueError("give either sections or geometry and supports, not both")
+        if self.sections is not None and self.zones is not None:
+            raise ValueError("with sections, give each section's zones in the sections list")
         if (self.geometry is None) != (self.supports is None):
             raise ValueError("give both geometry and supports, or neither for the example")
         return self
@@ -203,6 +211,7 @@ def loop_options(spec: DeteriorationScenario, seed, example: bool = False):
         threshold_sd_mm=lp.threshold_sd_mm,
         segment_length=lp.segment_length_m,
         max_steps=lp.max_steps,
+        min_step_passages=lp.min_step_passages,
         rate_cov=spec.settlement.rate_cov,
         rate_correlation_length=spec.settlement.rate_correlation_length_m,
         seed=seed,

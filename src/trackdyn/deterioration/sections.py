@@ -22,9 +22,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from trackdyn.deterioration.law_files import load_law
 from trackdyn.deterioration.loop import LoopOptions, predict
 from trackdyn.deterioration.scenario import loop_options, resolve_inputs
 from trackdyn.deterioration.settlement import SettlementLaw
+from trackdyn.deterioration.zones import check_zones, read_zones
 from trackdyn.errors import TrackdynInputError, error_message
 
 NAME = re.compile(r"^[A-Za-z0-9_.-]+$")
@@ -41,15 +43,19 @@ class Section:
         Name, used in file names.
     geometry, supports : str, optional
         CSV files; None for both: the built-in example.
+    zones : str, optional
+        Zone table (`trackdyn.deterioration.zones`); None: all open track.
     """
 
     name: str
     geometry: str | None = None
     supports: str | None = None
+    zones: str | None = None
 
 
 def read_sections(path) -> list[Section]:
-    """Read a sections CSV (``name,geometry,supports``, paths relative to the CSV file).
+    """Read a sections CSV (``name,geometry,supports[,zones]``, paths relative to the CSV
+    file; an empty ``zones`` cell: all open track).
 
     Parameters
     ----------
@@ -79,8 +85,11 @@ def read_sections(path) -> list[Section]:
             )
         seen.add(name)
         files = []
-        for key in ("geometry", "supports"):
-            value = getattr(row, key)
+        for key in ("geometry", "supports", "zones"):
+            value = getattr(row, key, None)
+            if key == "zones" and not isinstance(value, str):
+                files.append(None)
+                continue
             file = path.parent / str(value).strip()
             if not isinstance(value, str) or not file.is_file():
                 raise TrackdynInputError(f"{line}: {key} file {value!r} not found")
@@ -102,14 +111,19 @@ def sections_of(spec, base: Path) -> list[Section]:
     t = spec.track
     if t.sections is not None:
         return read_sections(base / t.sections)
+    zones = None
+    if t.zones is not None:
+        if not (base / t.zones).is_file():
+            raise TrackdynInputError(f"track.zones: {base / t.zones}: no such file")
+        zones = str((base / t.zones).resolve())
     if t.geometry is None:
-        return [Section("example")]
+        return [Section("example", zones=zones)]
     files = [base / t.geometry, base / t.supports]
     for key, file in zip(("geometry", "supports"), files, strict=True):
         if not file.is_file():
             raise TrackdynInputError(f"track.{key}: {file}: no such file")
     name = re.sub(r"[^A-Za-z0-9_.-]", "_", files[0].stem)
-    return [Section(name, str(files[0].resolve()), str(files[1].resolve()))]
+    return [Section(name, str(files[0].resolve()), str(files[1].resolve()), zones)]
 
 
 @dataclass(frozen=True)
@@ -128,6 +142,8 @@ class SectionTask:
         The loop options, with this section's rate-field seed.
     progress : bool
         Show a tonnage progress bar (in-process runs).
+    zones : tuple of Zone
+        The section's zones, read from ``section.zones``.
     """
 
     section: Section
@@ -135,6 +151,7 @@ class SectionTask:
     law: SettlementLaw
     options: LoopOptions
     progress: bool = False
+    zones: tuple = ()
 
 
 def run_section(task: SectionTask) -> dict:
@@ -155,7 +172,10 @@ def run_section(task: SectionTask) -> dict:
     name = task.section.name
     try:
         track = load_track(task.section.geometry, task.section.supports)
-        ds = predict(track, task.traffic, task.law, task.options, progress=task.progress)
+        position = track.supports.position
+        check_zones(task.zones, (position[0], position[-1]), task.section.zones or "zones")
+        ds = predict(track, task.traffic, task.law, task.options, zones=task.zones,
+                     progress=task.progress)  # fmt: skip
     except Exception as exc:  # noqa: BLE001 - reported with the section, others go on
         return {"name": name, "error": error_message(exc)}
     ds.attrs["section"] = name
@@ -175,13 +195,25 @@ def section_tasks(spec, base: Path, progress: bool = False) -> list[SectionTask]
         Show a tonnage progress bar in each task (for in-process runs).
     """
     traffic, law = resolve_inputs(spec, base)
+    s = spec.settlement
+    own = None if s.file is None else base / s.file
+
+    def load(kind, file):
+        return load_law(s.law, file or own, kind, **s.overrides)
 
     def options(i, example):
         return loop_options(spec, (spec.settlement.seed, i), example)
 
     return [
-        SectionTask(s, tuple(traffic), law, options(i, s.geometry is None), progress)
-        for i, s in enumerate(sections_of(spec, base))
+        SectionTask(
+            sec,
+            tuple(traffic),
+            law,
+            options(i, sec.geometry is None),
+            progress,
+            tuple(read_zones(sec.zones, load)) if sec.zones else (),
+        )  # fmt: skip
+        for i, sec in enumerate(sections_of(spec, base))
     ]
 
 

@@ -1,14 +1,19 @@
 """Settlement laws: permanent sleeper settlement against load cycles, and their parameters.
 
-Each law splits into a load factor ``f(Q, k2)`` [-] and a cycle function ``g(N)`` [m], so
-that under a constant rail-seat load ``Q`` the settlement after ``N`` cycles is
-``e = f(Q, k2) g(N)``. Over tonnage steps they are integrated with the time-hardening rule
-(`time_hardening_increment`): ``Δe = f(Q) (g(N_{i+1}) - g(N_i))``, which reproduces the
-closed form exactly for a constant load and any step sizes.
+The power, Shenton and Sato laws split into a load factor ``f(Q, k2)`` [-] and a cycle
+function ``g(N)`` [m], so that under a constant rail-seat load ``Q`` the settlement after
+``N`` cycles is ``e = f(Q, k2) g(N)``. ``g`` is a sum of terms
+(`trackdyn.deterioration.hardening`), each with the rule by which mixed traffic adds up on
+it (strain hardening: equivalent cycles for a power term), exact for a constant load and
+any step sizes. Counting starts at whole cycles: no law settles more for a fraction of a
+cycle than that fraction of the first cycle's settlement.
 
-Common to all laws: ``f = (Q / Q_ref)^load_exponent (k2 / k_ref)^stiffness_exponent``,
-with ``k2`` the linearised track stiffness per wheel under the sleeper (``stiffness_exponent
-= 0`` switches the stiffness scaling off; a negative value lets softer support settle more).
+Their load factor: ``f = (Q / Q_ref)^load_exponent (k2 / k_ref)^stiffness_exponent``, with
+``k2`` the linearised track stiffness per wheel under the sleeper (``stiffness_exponent =
+0`` switches the stiffness scaling off; a negative value lets softer support settle more).
+The Varandas law has no stiffness dependence (as published): stiffness acts on it only
+through the rail-seat loads; a zone's own parameters (`trackdyn.deterioration.zones`) carry
+what a structure or an approach does to it.
 
 ============  =========================================  ===========================
 law           ``g(N)``                                   own parameters
@@ -46,6 +51,7 @@ from typing import ClassVar
 
 import numpy as np
 
+from trackdyn.deterioration.hardening import Consolidation, Power
 from trackdyn.errors import TrackdynInputError
 
 COMMON = {"Q_ref": "N", "load_exponent": "-", "k_ref": "N/m", "stiffness_exponent": "-"}
@@ -133,17 +139,23 @@ class SettlementLaw(LawParameters):
         k = np.asarray(k2, dtype=float) / self.k_ref
         return q**self.load_exponent * k**self.stiffness_exponent
 
+    @property
+    def terms(self) -> tuple:
+        """The terms of ``g(N)`` (`trackdyn.deterioration.hardening`), which also say how
+        mixed traffic adds up on them."""
+        raise NotImplementedError
+
     def cycles(self, N):
         """Settlement at the reference load and stiffness after ``N`` cycles, ``g(N)`` [m].
 
-        Increasing, with ``g(0) = 0``.
+        Increasing, with ``g(0) = 0``; counted from whole cycles (linear over the first).
 
         Parameters
         ----------
         N : array_like
             Cumulative number of load cycles [-].
         """
-        raise NotImplementedError
+        return sum(term.curve(N) for term in self.terms)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -168,8 +180,10 @@ class PowerLaw(SettlementLaw):
         if self.beta > 1:
             raise TrackdynInputError("settlement parameter beta must be <= 1")
 
-    def cycles(self, N):
-        return self.K_s * np.asarray(N, dtype=float) ** self.beta
+    @property
+    def terms(self):
+        """See `SettlementLaw.terms`: ``K_s N^beta``."""
+        return (Power(self.K_s, self.beta),)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -193,9 +207,10 @@ class ShentonLaw(SettlementLaw):
     positive: ClassVar[tuple[str, ...]] = ("k1",)
     non_negative: ClassVar[tuple[str, ...]] = ("k2",)
 
-    def cycles(self, N):
-        n = np.asarray(N, dtype=float)
-        return self.k1 * n**0.2 + self.k2 * n
+    @property
+    def terms(self):
+        """See `SettlementLaw.terms`: ``k1 N^0.2`` and ``k2 N``."""
+        return (Power(self.k1, 0.2), Power(self.k2, 1.0))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -222,9 +237,10 @@ class SatoLaw(SettlementLaw):
     positive: ClassVar[tuple[str, ...]] = ("gamma", "alpha")
     non_negative: ClassVar[tuple[str, ...]] = ("beta",)
 
-    def cycles(self, N):
-        n = np.asarray(N, dtype=float)
-        return -self.gamma * np.expm1(-self.alpha * n) + self.beta * n
+    @property
+    def terms(self):
+        """See `SettlementLaw.terms`: ``gamma (1 - exp(-alpha N))`` and ``beta N``."""
+        return (Consolidation(self.gamma, self.alpha), Power(self.beta, 1.0))
 
 
 def harmonic(h, beta: float):
@@ -232,7 +248,8 @@ def harmonic(h, beta: float):
 
     ``S(h) = zeta(beta) - zeta(beta, h + 1)`` with the Hurwitz zeta function, from its
     Euler-Maclaurin expansion after shifting the argument to 9 or more (error below 1e-9
-    relative for ``0 < beta < 1``).
+    relative for ``0 < beta < 1``); below one cycle ``S(h) = h``, linear up to the first
+    cycle (counting starts at whole cycles).
 
     Parameters
     ----------
@@ -242,7 +259,9 @@ def harmonic(h, beta: float):
         Exponent, 0 < beta < 1 [-].
     """
     h = np.asarray(h, dtype=float)
-    return (_hurwitz(beta, 1.0)[0] - _hurwitz(beta, h + 1.0)).reshape(h.shape)
+    whole = np.maximum(h, 1.0)
+    s = (_hurwitz(beta, 1.0)[0] - _hurwitz(beta, whole + 1.0)).reshape(h.shape)
+    return np.where(h < 1.0, h, s)
 
 
 def _hurwitz(s: float, a):
@@ -332,24 +351,3 @@ LAWS: dict[str, type[LawParameters]] = {
     "varandas": VarandasLaw,
 }
 """Registry of settlement laws by name; add an entry to plug in another law."""
-
-
-def time_hardening_increment(law: SettlementLaw, factor, N, dN):
-    """Settlement increment over ``dN`` cycles by the time-hardening rule [m].
-
-    ``Δe = factor (g(N + dN) - g(N))``: the cycles already applied set the point on the
-    cycle curve, the load of this step only its scale.
-
-    Parameters
-    ----------
-    law : SettlementLaw
-        The law supplying ``g``.
-    factor : array_like
-        Load factor ``f(Q, k2)`` of the step [-].
-    N : array_like
-        Cycles applied before the step [-].
-    dN : array_like
-        Cycles of the step [-].
-    """
-    N = np.asarray(N, dtype=float)
-    return np.asarray(factor) * (law.cycles(N + dN) - law.cycles(N))
