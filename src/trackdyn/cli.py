@@ -17,7 +17,7 @@ from rich.text import Text
 from trackdyn import __version__
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import write_netcdf
-from trackdyn.output import output_folder
+from trackdyn.staging import output_folder
 
 app = typer.Typer(
     add_completion=False,
@@ -167,11 +167,11 @@ def track(
 
     Without --geometry and --supports, the built-in 1 km example section is used.
     """
+    from trackdyn.commands.track import analyse_sections
     from trackdyn.data import EXAMPLE_GEOMETRY, EXAMPLE_SUPPORTS, example_path
     from trackdyn.errors import require_positive
+    from trackdyn.track.analysis import write_track_outputs
     from trackdyn.track.rails import rail_section
-    from trackdyn.track.report import write_track_outputs
-    from trackdyn.track.sections import analyse_sections
 
     require_positive("--wheel-load-kN", wheel_load_kN)
     if (geometry is None) != (supports is None):
@@ -202,9 +202,9 @@ def run(
 
     With no scenario: the loaded wagon, 11-DOF model, the example 1 km section, 60 km/h.
     """
-    from trackdyn import plots
+    from trackdyn.commands import plots
+    from trackdyn.commands.run import load_scenario
     from trackdyn.results import summary
-    from trackdyn.scenario import load_scenario
     from trackdyn.simulation import simulate
 
     spec, base = load_scenario(scenario)
@@ -241,7 +241,7 @@ def study(
     ] = None,
 ):
     """Run a study (scenario matrix, parameter variation or speed sweep) on Dask."""
-    from trackdyn.studies.outputs import write_study
+    from trackdyn.commands.study import write_study
     from trackdyn.studies.runner import gather, run_study
     from trackdyn.studies.scenarios import load_study, tasks
 

@@ -34,11 +34,11 @@ from typing import Annotated, Literal
 
 from pydantic import Field, PositiveFloat
 
+from trackdyn.commands.run import TrackSpec
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import read_toml
 from trackdyn.limits import MAX_SPEED_KMH
 from trackdyn.options import RunOptions, Strict, VehicleSpec, parse, vehicle_source
-from trackdyn.scenario import TrackSpec
 from trackdyn.studies.runner import Task, TrackRef
 from trackdyn.track.excitation import CASES
 from trackdyn.vehicle.parameters import PARAMETERS, load_vehicle

@@ -30,7 +30,7 @@ from trackdyn.io import (
     support_pieces,
     supports_of,
 )
-from trackdyn.track.report import (
+from trackdyn.track.analysis import (
     SEGMENT_M,
     curve_picks,
     most_voided,
@@ -205,7 +205,7 @@ def _read_curve(path, rail: str, position: float):
 
 
 def analyse_sections(geometry, supports, static_load, delta, rail_section, **options):
-    """The track job of `trackdyn.track.report` on a long track, section by section.
+    """The track job of `trackdyn.track.analysis` on a long track, section by section.
 
     Parameters
     ----------

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from trackdyn import plots
+from trackdyn.commands import plots
 from trackdyn.io import write_netcdf
 
 

@@ -238,7 +238,7 @@ def write_track_outputs(ds: xr.Dataset, picks, basin, folder) -> pd.DataFrame:
     folder : Path
         Output folder.
     """
-    from trackdyn import plots
+    from trackdyn.commands import plots
     from trackdyn.io import write_netcdf
 
     ps, delta = ds.attrs["static_wheel_load_N"], ds.attrs["delta"]
