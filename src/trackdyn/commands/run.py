@@ -1,4 +1,4 @@
-"""Scenario files (TOML) for `trackdyn run`: vehicle, track and run options.
+"""`trackdyn run`: the scenario file (TOML) and the job, one vehicle over one track.
 
 ```toml
 [vehicle]
@@ -19,25 +19,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from trackdyn.io import read_toml
-from trackdyn.options import RunOptions, Strict, VehicleSpec, parse
-
-
-class TrackSpec(Strict):
-    """``[track]``: ``geometry`` and ``supports`` CSV files; neither: the built-in example."""
-
-    geometry: Path | None = None
-    supports: Path | None = None
-
-    def paths(self, base: Path) -> tuple[Path | None, Path | None]:
-        """Both files relative to ``base`` (None where not given: the example)."""
-        return tuple(None if p is None else base / p for p in (self.geometry, self.supports))
-
-    def load(self, base: Path):
-        """The track (`trackdyn.track.track.Track`)."""
-        from trackdyn.data import load_track
-
-        return load_track(*self.paths(base))
+from trackdyn.commands import plots
+from trackdyn.commands.tables import frame_table
+from trackdyn.errors import named
+from trackdyn.io import write_netcdf
+from trackdyn.options import RunOptions, Strict, TrackSpec, VehicleSpec, load_toml
+from trackdyn.staging import output_folder
 
 
 class Scenario(Strict):
@@ -56,6 +43,40 @@ def load_scenario(path=None) -> tuple[Scenario, Path]:
     path : path, optional
         Scenario TOML file.
     """
-    if path is None:
-        return Scenario(), Path.cwd()
-    return parse(Scenario, read_toml(path), str(path)), Path(path).resolve().parent
+    return load_toml(Scenario, path)
+
+
+def run(scenario, out, overwrite: bool, console) -> None:
+    """Simulate the scenario; write results.nc, summary.csv and three figures into ``out``.
+
+    Parameters
+    ----------
+    scenario : path, optional
+        Scenario TOML file; None: the built-in example.
+    out : Path
+        Output folder.
+    overwrite : bool
+        Replace another command's outputs in ``out``.
+    console : rich.console.Console
+        Where progress and the summary table are shown.
+    """
+    from trackdyn.results import summary
+    from trackdyn.simulation import simulate
+
+    spec, base = load_scenario(scenario)
+    vehicle = spec.vehicle.load(base)
+    with output_folder(out, "run", overwrite) as stage:
+        with console.status("reading the track"):
+            trk = spec.track.load(base)
+        with named(scenario):
+            ds = simulate(vehicle, trk, spec.run, progress=True)
+        table = summary(ds)
+        write_netcdf(ds, stage / "results.nc")
+        table.to_csv(stage / "summary.csv", index=False, float_format="%.4g")
+        plots.wheel_loads(ds, stage / "wheel_loads.png")
+        plots.secondary(ds, stage / "secondary_displacement.png")
+        plots.wedge_friction(ds, stage / "wedge_friction.png")
+    console.print(
+        frame_table(table, f"{ds.attrs['model']}: {vehicle.name}, {spec.run.speed_kmh:g} km/h")
+    )
+    console.print(f"wrote results.nc, summary.csv and 3 figures to {out}")
