@@ -17,7 +17,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from trackdyn.track.beam import linear_supports, solve_beam
+from trackdyn.beam.static import linear_supports, solve_beam
 from trackdyn.track.quality import longitudinal_level, segment_sd
 from trackdyn.track.track import RAILS, LinearisedTrack
 from trackdyn.units import GRAVITY
