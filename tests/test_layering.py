@@ -1,4 +1,5 @@
-"""The package's import graph has no cycle, counting imports inside functions too."""
+"""The package's layers: no import cycle, and no library module imports the command layer,
+the CLI or a plotting module (counting imports inside functions too)."""
 
 import ast
 from pathlib import Path
@@ -7,26 +8,45 @@ import trackdyn
 
 PACKAGE = Path(trackdyn.__file__).parent
 
+COMMAND_LAYER = ("trackdyn.cli", "trackdyn.__main__", "trackdyn.commands")
+"""Modules (and packages) that may read options, write files and draw figures."""
+
+PENDING_MOVES = {
+    # Command-layer modules of `trackdyn deteriorate` and `trackdyn calibrate` still in the
+    # library; each leaves this list when it moves under trackdyn.commands.
+    "trackdyn.deterioration.plots",  # the deterioration and calibration figures
+    "trackdyn.deterioration.outputs",  # deteriorate's files
+    "trackdyn.deterioration.scenario",  # deteriorate's scenario file
+    "trackdyn.deterioration.sections",  # deteriorate's sections run on Dask
+    "trackdyn.deterioration.calibration_outputs",  # calibrate's files
+}
+
 
 def module_name(path: Path) -> str:
     parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
-def import_graph() -> dict[str, set[str]]:
-    modules = {module_name(p): p for p in PACKAGE.rglob("*.py")}
-    graph = {}
-    for name, path in modules.items():
-        targets = set()
+def imported_names() -> dict[str, set[str]]:
+    """Every dotted name each trackdyn module imports (``from a import b``: ``a``, ``a.b``)."""
+    found = {}
+    for path in PACKAGE.rglob("*.py"):
+        names = set()
         for node in ast.walk(ast.parse(path.read_text())):
             if isinstance(node, ast.ImportFrom) and node.module:
-                names = [f"{node.module}.{a.name}" for a in node.names] + [node.module]
+                names |= {f"{node.module}.{a.name}" for a in node.names} | {node.module}
             elif isinstance(node, ast.Import):
-                names = [a.name for a in node.names]
-            else:
-                continue
-            # the deepest trackdyn module each import names (a package's __init__ or a module)
-            targets |= {next((n for n in _prefixes(t) if n in modules), "") for t in names}
+                names |= {a.name for a in node.names}
+        found[module_name(path)] = names
+    return found
+
+
+def import_graph() -> dict[str, set[str]]:
+    found = imported_names()
+    graph = {}
+    for name, imported in found.items():
+        # the deepest trackdyn module each import names (a package's __init__ or a module)
+        targets = {next((n for n in _prefixes(t) if n in found), "") for t in imported}
         graph[name] = {t for t in targets if t and t != name}
     return graph
 
@@ -57,6 +77,22 @@ def find_cycle(graph):
     return None
 
 
+def _within(name: str, packages) -> bool:
+    return any(name == p or name.startswith(p + ".") for p in packages)
+
+
+def forbidden(name: str) -> bool:
+    """An import a library module must not make: the command layer, the CLI, plotting."""
+    plotting = _within(name, ("matplotlib",)) or any("plots" in p for p in name.split("."))
+    return plotting or _within(name, COMMAND_LAYER)
+
+
+def layering_violations(imported: dict[str, set[str]], pending=PENDING_MOVES) -> list[str]:
+    """``module -> name`` for each library module importing what `forbidden` names."""
+    library = [m for m in imported if not _within(m, COMMAND_LAYER) and m not in pending]
+    return sorted(f"{m} -> {n}" for m in library for n in imported[m] if forbidden(n))
+
+
 def test_the_checker_finds_a_cycle():
     assert find_cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]
     assert find_cycle({"a": {"b"}, "b": set()}) is None
@@ -65,3 +101,35 @@ def test_the_checker_finds_a_cycle():
 def test_no_import_cycle():
     graph = import_graph()
     assert find_cycle(graph) is None, " -> ".join(find_cycle(graph))
+
+
+def test_the_checker_finds_a_library_module_reaching_up():
+    imported = {
+        "trackdyn.track.track": {"numpy", "trackdyn.errors"},
+        "trackdyn.track.a": {"trackdyn.commands.run", "trackdyn.commands.run.Scenario"},
+        "trackdyn.track.b": {"trackdyn.cli"},
+        "trackdyn.track.c": {"matplotlib.pyplot"},
+        "trackdyn.track.d": {"trackdyn.vehicle", "trackdyn.vehicle.plots"},
+        "trackdyn.track.e": {"trackdyn.commands.plots"},
+        "trackdyn.commands.run": {"trackdyn.commands.plots", "matplotlib"},
+        "trackdyn.cli": {"trackdyn.commands.run"},
+        "trackdyn.__main__": {"trackdyn.cli"},
+    }
+    assert layering_violations(imported, pending=set()) == [
+        "trackdyn.track.a -> trackdyn.commands.run",
+        "trackdyn.track.a -> trackdyn.commands.run.Scenario",
+        "trackdyn.track.b -> trackdyn.cli",
+        "trackdyn.track.c -> matplotlib.pyplot",
+        "trackdyn.track.d -> trackdyn.vehicle.plots",
+        "trackdyn.track.e -> trackdyn.commands.plots",
+    ]
+    assert "trackdyn.track.b -> trackdyn.cli" not in layering_violations(
+        imported, pending={"trackdyn.track.b"}
+    )
+    assert not forbidden("trackdyn.commandsx") and forbidden("trackdyn.commands")
+
+
+def test_library_modules_do_not_import_commands_cli_or_plots():
+    imported = imported_names()
+    assert layering_violations(imported) == []
+    assert PENDING_MOVES <= set(imported), "a pending move is done: take it off PENDING_MOVES"

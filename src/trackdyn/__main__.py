@@ -3,7 +3,7 @@
 Interrupts are handled before anything heavy is imported, and the process ends without
 the interpreter's slow shutdown (where Python gives SIGINT back its default action), so
 Ctrl-C ends the command with exit code 130 and no partial output at any moment
-(`trackdyn.output`).
+(`trackdyn.staging`).
 """
 
 import os
@@ -12,7 +12,7 @@ import sys
 
 def main():
     """Run the command-line interface."""
-    from trackdyn.output import handle_interrupts
+    from trackdyn.staging import handle_interrupts
 
     handle_interrupts()
     from trackdyn.cli import app

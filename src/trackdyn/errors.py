@@ -1,6 +1,7 @@
 """The one exception type for bad input, and the checks that raise it."""
 
 import traceback
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -39,6 +40,28 @@ def require_positive(name: str, value) -> np.ndarray:
     if arr.size == 0 or not np.all(np.isfinite(arr)) or np.any(arr <= 0):
         raise TrackdynInputError(f"{name} must be finite and > 0, got {shown(value)}")
     return arr
+
+
+def unknown(kind: str, name, known, where: str = "") -> TrackdynInputError:
+    """The refusal of a name that is not a key of a registry.
+
+    Parameters
+    ----------
+    kind : str
+        What the name names (``model``, ``rail section``, ...).
+    name : object
+        The name given.
+    known : iterable of str
+        The registry's names, listed in the message.
+    where : str
+        Prefix naming the source (``"wagon.toml: "``), or empty.
+
+    Returns
+    -------
+    TrackdynInputError
+        ``unknown <kind> <name>; known: <names>``, for the caller to raise.
+    """
+    return TrackdynInputError(f"{where}unknown {kind} {name!r}; known: {', '.join(known)}")
 
 
 def check_series(
@@ -81,3 +104,33 @@ def error_message(exc: BaseException) -> str:
         return str(exc)
     last = traceback.extract_tb(exc.__traceback__)[-1]
     return f"{type(exc).__name__}: {exc} ({last.filename}:{last.lineno})"
+
+
+@contextmanager
+def named(source):
+    """Prefix a refusal with the scenario file it comes from (if it does not name it).
+
+    Parameters
+    ----------
+    source : path or None
+        The scenario file; None: the built-in example.
+    """
+    try:
+        yield
+    except TrackdynInputError as exc:
+        where = str(source) if source is not None else "built-in example"
+        if str(exc).startswith(where):
+            raise
+        raise TrackdynInputError(f"{where}: {exc}") from None
+
+
+def require_workers(workers: int | None) -> None:
+    """Refuse a ``--workers`` count below 1 (None: the default, one per core).
+
+    Parameters
+    ----------
+    workers : int or None
+        Worker processes asked for.
+    """
+    if workers is not None and workers < 1:
+        raise TrackdynInputError(f"--workers must be >= 1, got {workers}")

@@ -21,12 +21,14 @@ import pandas as pd
 from trackdyn.errors import TrackdynInputError, check_series
 from trackdyn.track.support import Curves
 from trackdyn.track.track import RAILS, Geometry, Supports
+from trackdyn.units import UNITS
 
-UNITS = {
-    "length": {"m": 1.0, "mm": 1e-3, "km": 1e3},
-    "force": {"N": 1.0, "kN": 1e3, "MN": 1e6},
-    "stiffness": {"N_per_m": 1.0, "kN_per_mm": 1e6, "MN_per_m": 1e6},
+COLUMN_UNITS = {
+    "length": ("m", "mm", "km"),
+    "force": ("N", "kN", "MN"),
+    "stiffness": ("N_per_m", "kN_per_mm", "MN_per_m"),
 }
+"""Units a column name may end in, per kind; ``_per_`` spells ``/`` (`trackdyn.units.UNITS`)."""
 
 
 CHUNK_ROWS = 100_000
@@ -74,14 +76,14 @@ def column(frame: pd.DataFrame, quantity: str, kind: str, where) -> tuple[np.nda
     matches = [c for c in frame.columns if str(c).startswith(quantity + "_")]
     if not matches:
         raise TrackdynInputError(
-            f"{where}: no column {quantity}_<unit> (units: {', '.join(UNITS[kind])})"
+            f"{where}: no column {quantity}_<unit> (units: {', '.join(COLUMN_UNITS[kind])})"
         )
     name = matches[0]
     unit = name[len(quantity) + 1 :]
-    if unit not in UNITS[kind]:
+    if unit not in COLUMN_UNITS[kind]:
         raise TrackdynInputError(
             f"{where}: unit {unit!r} of column {name!r} does not parse as a {kind} unit "
-            f"({', '.join(UNITS[kind])})"
+            f"({', '.join(COLUMN_UNITS[kind])})"
         )
     values = pd.to_numeric(frame[name], errors="coerce").to_numpy(dtype=float)
     bad = np.flatnonzero(~np.isfinite(values))
@@ -90,7 +92,7 @@ def column(frame: pd.DataFrame, quantity: str, kind: str, where) -> tuple[np.nda
             f"{where}: column {name!r} is empty, NaN, infinite or not a number "
             f"at line {frame.index[bad[0]] + 2}"
         )
-    return values * UNITS[kind][unit], name
+    return values * UNITS[unit.replace("_per_", "/")][1], name
 
 
 def read_geometry(path) -> Geometry:

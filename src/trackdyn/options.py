@@ -2,8 +2,9 @@
 
 `RunOptions` is the ``[run]`` table of every scenario kind (run, study, deteriorate) and
 the options argument of `trackdyn.simulate`; a new option is a new field here. `VehicleSpec`
-is the ``[vehicle]`` table; `vehicle_source` is the one rule that tells a preset name from
-a parameter file.
+is the ``[vehicle]`` table, `TrackSpec` the ``[track]`` table; `vehicle_source` is the one
+rule that tells a preset name from a parameter file. `load_toml` reads and validates a
+scenario file of any kind.
 
 ```toml
 [run]
@@ -35,7 +36,8 @@ from pydantic import (
     field_validator,
 )
 
-from trackdyn.errors import TrackdynInputError
+from trackdyn.errors import TrackdynInputError, unknown
+from trackdyn.io import read_toml
 from trackdyn.limits import MAX_SPEED_KMH
 
 
@@ -92,7 +94,7 @@ class RunOptions(Strict):
         from trackdyn.vehicle.models import MODELS
 
         if value not in MODELS:
-            raise ValueError(f"unknown model {value!r}; known: {', '.join(MODELS)}")
+            raise unknown("model", value, MODELS)
         return value
 
     @property
@@ -136,6 +138,47 @@ class VehicleSpec(Strict):
         from trackdyn.vehicle.parameters import load_vehicle
 
         return load_vehicle(self.source(base), **self.overrides)
+
+
+class TrackSpec(Strict):
+    """``[track]``: ``geometry`` and ``supports`` CSV files; neither: the built-in example."""
+
+    geometry: Path | None = None
+    supports: Path | None = None
+
+    def paths(self, base: Path) -> tuple[Path | None, Path | None]:
+        """Both files relative to ``base`` (None where not given: the example)."""
+        return tuple(None if p is None else base / p for p in (self.geometry, self.supports))
+
+    def load(self, base: Path):
+        """The track (`trackdyn.track.track.Track`)."""
+        from trackdyn.data import load_track
+
+        return load_track(*self.paths(base))
+
+
+def load_toml(model: type[BaseModel], path=None, default: BaseModel | None = None):
+    """The scenario file ``path`` validated against ``model``, and its folder.
+
+    Parameters
+    ----------
+    model : type of pydantic.BaseModel
+        The file's model.
+    path : path, optional
+        TOML file; None gives ``default`` (``model()`` if not given) and the working folder.
+    default : pydantic.BaseModel, optional
+        The built-in scenario used without a file.
+
+    Returns
+    -------
+    spec : pydantic.BaseModel
+        The validated file.
+    base : Path
+        The folder its relative paths start from.
+    """
+    if path is None:
+        return (model() if default is None else default), Path.cwd()
+    return parse(model, read_toml(path), str(path)), Path(path).resolve().parent
 
 
 def parse(model: type[BaseModel], data: dict, where: str):

@@ -14,7 +14,7 @@ import os
 from contextlib import contextmanager
 from contextvars import ContextVar
 
-from trackdyn.errors import TrackdynInputError
+from trackdyn.errors import TrackdynInputError, require_workers
 from trackdyn.progress import progress_bar
 
 
@@ -75,8 +75,7 @@ def shared_cluster(workers: int | None = None, scheduler: str | None = None):
     scheduler : str, optional
         Address of an existing Dask scheduler.
     """
-    if workers is not None and workers < 1:
-        raise TrackdynInputError(f"--workers must be >= 1, got {workers}")
+    require_workers(workers)
     if workers == 1 and not scheduler:
         yield
         return
@@ -132,8 +131,7 @@ def run_tasks(
     label : str
         What the progress bar counts.
     """
-    if workers is not None and workers < 1:
-        raise TrackdynInputError(f"--workers must be >= 1, got {workers}")
+    require_workers(workers)
     with progress_bar(progress, len(tasks), label) as bar:
         if workers == 1 and not scheduler:
             results = []

@@ -1,4 +1,8 @@
-"""Units of parameter files: every value is a table ``{value, unit, source}``."""
+"""Units: the one table of unit names and their SI factors, and the parameter-file values.
+
+Every value of a parameter file is a table ``{value, unit, source}``; the data files' column
+names end in one of these units (`trackdyn.io`).
+"""
 
 from __future__ import annotations
 
@@ -16,6 +20,7 @@ UNITS: dict[str, tuple[str, float]] = {
     "t m^2": ("kg m^2", 1e3),
     "N": ("N", 1.0),
     "kN": ("N", 1e3),
+    "MN": ("N", 1e6),
     "N/m": ("N/m", 1.0),
     "kN/m": ("N/m", 1e3),
     "kN/mm": ("N/m", 1e6),
@@ -25,6 +30,7 @@ UNITS: dict[str, tuple[str, float]] = {
     "MN s/m": ("N s/m", 1e6),
     "m": ("m", 1.0),
     "mm": ("m", 1e-3),
+    "km": ("m", 1e3),
     "m/cycle": ("m/cycle", 1.0),
     "mm/cycle": ("m/cycle", 1e-3),
     "1/cycle": ("1/cycle", 1.0),

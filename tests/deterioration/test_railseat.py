@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
+from trackdyn.beam.railseat import rest_state
+from trackdyn.beam.static import linear_supports, solve_beam
 from trackdyn.deterioration.ballast import Ballast
-from trackdyn.deterioration.railseat import rest_state
-from trackdyn.track.beam import linear_supports, solve_beam
 from trackdyn.track.rails import rail_section
 from trackdyn.track.synthetic import VoidedSleepers, synthetic_track
 

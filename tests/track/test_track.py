@@ -91,7 +91,7 @@ def test_track_needs_overlap():
 
 
 def test_curve_picks_name_each_sleeper_once_with_every_criterion_it_meets():
-    from trackdyn.track.report import curve_picks
+    from trackdyn.track.analysis import curve_picks
 
     # 2 rails x 3 sleepers: left 1 is the softest and has the largest ys; right 2 is the
     # stiffest; sorted k2 is 50, 80, 90, 100, 120, 300, so the median (index 3) is 100

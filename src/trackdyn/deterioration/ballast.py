@@ -2,7 +2,7 @@
 
 Settlement lowers the ballast under a rail seat; the sleeper stays on the rail until the
 rail comes down onto the ballast, so a sleeper whose ballast sinks faster than its
-neighbours' hangs. The rail of each side is a `trackdyn.deterioration.railseat.RailBeam`:
+neighbours' hangs. The rail of each side is a `trackdyn.beam.railseat.RailBeam`:
 one linear, tensionless spring per sleeper with the stiffness equivalent to the measured
 ``k2`` (eq 5.7 times the spacing, `LinearisedTrack.support_stiffness`) behind a gap. The
 gap at the start is the sleeper's seating gap in excess of the median of its neighbours
@@ -47,7 +47,7 @@ import dataclasses
 import numpy as np
 from scipy.ndimage import median_filter
 
-from trackdyn.deterioration.railseat import RailBeam, RailRest, Windows, rest_state
+from trackdyn.beam.railseat import RailBeam, RailRest, Windows, rest_state
 from trackdyn.errors import TrackdynInputError, shown
 from trackdyn.track.synthetic import correlated_field
 from trackdyn.track.track import RAILS, Geometry, LinearisedTrack

@@ -42,8 +42,7 @@ from typing import Literal
 from pydantic import Field, NonNegativeFloat, PositiveFloat, PositiveInt, model_validator
 
 from trackdyn.deterioration.scenario import DeteriorationScenario
-from trackdyn.io import read_toml
-from trackdyn.options import Strict, parse
+from trackdyn.options import Strict, load_toml
 
 
 class SurveySpec(Strict):
@@ -117,5 +116,4 @@ def load_calibration(path) -> tuple[CalibrationScenario, Path]:
     path : path
         Calibration TOML file.
     """
-    path = Path(path)
-    return parse(CalibrationScenario, read_toml(path), str(path)), path.resolve().parent
+    return load_toml(CalibrationScenario, path)

@@ -25,7 +25,7 @@ from __future__ import annotations
 from importlib.resources import files
 
 from trackdyn.deterioration.settlement import LAWS, LawParameters
-from trackdyn.errors import TrackdynInputError
+from trackdyn.errors import TrackdynInputError, unknown
 from trackdyn.io import read_toml
 from trackdyn.units import si_value
 
@@ -45,7 +45,7 @@ def _law_table(name: str, path) -> tuple[type[LawParameters], dict, str]:
 
 def _full_table(name: str, path) -> tuple[type[LawParameters], dict, str]:
     if name not in LAWS:
-        raise TrackdynInputError(f"unknown settlement law {name!r}; known: {', '.join(LAWS)}")
+        raise unknown("settlement law", name, LAWS)
     where = str(path) if path is not None else "settlement.toml (shipped)"
     data = read_toml(path if path is not None else DEFAULT_FILE)
     if name not in data or not isinstance(data[name], dict):

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from trackdyn.plots import RAIL_COLOURS, plt, save
+from trackdyn.commands.plots import RAIL_COLOURS, plt, save
 
 
 def geometry_evolution(ds, path, title: str = "") -> None:

@@ -1,4 +1,4 @@
-"""Study files and the runs they expand to: the §5.4.1 matrix, parameter variation, speeds.
+"""Studies and the runs they expand to: the §5.4.1 matrix, parameter variation, speeds.
 
 ```toml
 kind = "matrix"                  # matrix, sensitivity or speed
@@ -35,10 +35,8 @@ from typing import Annotated, Literal
 from pydantic import Field, PositiveFloat
 
 from trackdyn.errors import TrackdynInputError
-from trackdyn.io import read_toml
 from trackdyn.limits import MAX_SPEED_KMH
-from trackdyn.options import RunOptions, Strict, VehicleSpec, parse, vehicle_source
-from trackdyn.scenario import TrackSpec
+from trackdyn.options import RunOptions, Strict, TrackSpec, VehicleSpec, vehicle_source
 from trackdyn.studies.runner import Task, TrackRef
 from trackdyn.track.excitation import CASES
 from trackdyn.vehicle.parameters import PARAMETERS, load_vehicle
@@ -79,13 +77,6 @@ class Study(Strict):
     matrix: MatrixSpec = MatrixSpec()
     sensitivity: SensitivitySpec = SensitivitySpec()
     speed: SpeedSpec = SpeedSpec()
-
-
-def load_study(path=None) -> tuple[Study, Path]:
-    """The study in ``path`` (the built-in example: the 2-DOF §5.4.1 matrix, when None)."""
-    if path is None:
-        return Study(run=RunOptions(model="2dof")), Path.cwd()
-    return parse(Study, read_toml(path), str(path)), Path(path).resolve().parent
 
 
 def _scaled(source: str, overrides: dict, factors: dict) -> dict:

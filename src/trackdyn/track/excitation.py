@@ -17,7 +17,7 @@ import dataclasses
 
 import numpy as np
 
-from trackdyn.errors import TrackdynInputError
+from trackdyn.errors import unknown
 from trackdyn.track.track import Geometry, LinearisedTrack
 
 RIGID_STIFFNESS = 1e11
@@ -47,7 +47,7 @@ def excitation_case(lin: LinearisedTrack, case: str) -> LinearisedTrack:
         ``i``, ``ii``, ``iii`` or ``iv``.
     """
     if case not in CASES:
-        raise TrackdynInputError(f"unknown excitation case {case!r}; known: {', '.join(CASES)}")
+        raise unknown("excitation case", case, CASES)
     if case == "iv":
         return lin
     if case == "iii":

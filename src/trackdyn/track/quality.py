@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 from scipy import signal
 
-from trackdyn.errors import TrackdynInputError, check_series, shown
+from trackdyn.errors import TrackdynInputError, check_series, shown, unknown
 
 WAVEBANDS: dict[str, tuple[float, float]] = {
     "D1": (3.0, 25.0),
@@ -49,7 +49,7 @@ def _band(band) -> tuple[str, float, float]:
     if isinstance(band, str):
         key = band.upper()
         if key not in WAVEBANDS:
-            raise TrackdynInputError(f"unknown band {band!r}; known: {', '.join(WAVEBANDS)}")
+            raise unknown("band", band, WAVEBANDS)
         return key, *WAVEBANDS[key]
     try:
         lo, hi = (float(v) for v in band)

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from trackdyn.errors import TrackdynInputError
+from trackdyn.errors import unknown
 
 E_RAIL_STEEL = 210e9
 """Young's modulus of rail steel [Pa]."""
@@ -53,7 +53,7 @@ class RailSection:
         return E_RAIL_STEEL * self.second_moment
 
 
-RAILS: dict[str, RailSection] = {
+RAIL_SECTIONS: dict[str, RailSection] = {
     r.name: r
     for r in (
         RailSection("60E1", 60.2, 76.71e-4, 3038e-8, "EN 13674-1"),
@@ -75,7 +75,7 @@ def rail_section(name: str) -> RailSection:
     -------
     RailSection
     """
-    for key, section in RAILS.items():
+    for key, section in RAIL_SECTIONS.items():
         if key.lower() == str(name).lower():
             return section
-    raise TrackdynInputError(f"unknown rail section {name!r}; known: {', '.join(RAILS)}")
+    raise unknown("rail section", name, RAIL_SECTIONS)

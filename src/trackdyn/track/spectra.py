@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import signal
 
-from trackdyn.errors import TrackdynInputError, check_series
+from trackdyn.errors import TrackdynInputError, check_series, unknown
 from trackdyn.track.quality import to_uniform_grid
 
 
@@ -84,7 +84,7 @@ def get_spectrum(spectrum: str | TrackSpectrum) -> TrackSpectrum:
     """Look up a spectrum by name (case-insensitive) or pass a :class:`TrackSpectrum` through."""
     found = spectrum if isinstance(spectrum, TrackSpectrum) else SPECTRA.get(str(spectrum).lower())
     if found is None:
-        raise TrackdynInputError(f"unknown spectrum {spectrum!r}; known: {', '.join(SPECTRA)}")
+        raise unknown("spectrum", spectrum, SPECTRA)
     return found
 
 

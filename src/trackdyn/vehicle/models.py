@@ -20,7 +20,7 @@ eqs 5.12-5.33.
 
 from __future__ import annotations
 
-from trackdyn.errors import TrackdynInputError
+from trackdyn.errors import unknown
 from trackdyn.vehicle.assembly import Assembly, Body, Contact, Damper, Model, Point, Spring, Wedge
 from trackdyn.vehicle.parameters import Vehicle
 
@@ -184,5 +184,5 @@ MODELS = {
 def build_model(name: str, vehicle: Vehicle) -> Model:
     """Build a model by name, a key of `MODELS`."""
     if name not in MODELS:
-        raise TrackdynInputError(f"unknown model {name!r}; known: {', '.join(MODELS)}")
+        raise unknown("model", name, MODELS)
     return MODELS[name](vehicle)

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from importlib.resources import files
 from pathlib import Path
 
-from trackdyn.errors import TrackdynInputError, shown
+from trackdyn.errors import TrackdynInputError, shown, unknown
 from trackdyn.io import read_toml
 from trackdyn.units import GRAVITY, si_value
 
@@ -148,9 +148,7 @@ def _check_name(key: str, where: str = "") -> None:
         source, meaning = DERIVED[key]
         raise TrackdynInputError(f"{where}{key} is derived ({meaning}): give {source} instead")
     if key not in PARAMETERS and key != "name":
-        raise TrackdynInputError(
-            f"{where}unknown vehicle parameter {key!r}; known: {', '.join(PARAMETERS)}"
-        )
+        raise unknown("vehicle parameter", key, PARAMETERS, where)
 
 
 def _resolve(name_or_path) -> Path:
@@ -162,9 +160,7 @@ def _resolve(name_or_path) -> Path:
         known = sorted(
             p.name.removesuffix(".toml") for p in PRESETS.iterdir() if p.name.endswith(".toml")
         )
-        raise TrackdynInputError(
-            f"unknown vehicle preset {name_or_path!r}; known: {', '.join(known)}"
-        )
+        raise unknown("vehicle preset", name_or_path, known)
     return Path(str(preset))
 
 

@@ -4,12 +4,12 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from trackdyn.commands.track import analyse_sections, track_sections
 from trackdyn.data import load_track
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import write_geometry, write_supports
+from trackdyn.track.analysis import track_dataset, voided_basin
 from trackdyn.track.rails import rail_section
-from trackdyn.track.report import track_dataset, voided_basin
-from trackdyn.track.sections import analyse_sections, track_sections
 from trackdyn.track.synthetic import VoidedSleepers, synthetic_track
 
 PS = 127.5e3

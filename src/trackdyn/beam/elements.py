@@ -1,7 +1,7 @@
 """Hermite cubic Euler-Bernoulli beam elements: shape functions and banded stiffness.
 
-The elements of the rail beam (`trackdyn.track.beam`) and of the rail-seat load windows
-(`trackdyn.deterioration.railseat`). Degrees of freedom per node: deflection ``w`` [m]
+The elements of the rail beam (`trackdyn.beam.static`) and of the rail-seat load windows
+(`trackdyn.beam.railseat`). Degrees of freedom per node: deflection ``w`` [m]
 and rotation ``theta`` [rad], in the order (w1, theta1, w2, theta2).
 
 References

@@ -1,10 +1,11 @@
-"""A long track analysed section by section, in memory that does not grow with its length.
+"""`trackdyn track`: a long track analysed section by section, then its files and figures.
 
-`trackdyn track` reads the geometry and supports files a piece at a time (`trackdyn.io`)
-and cuts the track into sections of about `SECTION_M`. Each section holds `MARGIN_M` of
-track each side of its core, so the band-pass filters of the quality bands settle (within
-about one longest wavelength, 70 m for D2) before the core; of each section only the core is
-kept, and the cores joined give what the whole track read at once gives.
+The memory taken does not grow with the track's length: the geometry and supports files
+are read a piece at a time (`trackdyn.io`) and the track is cut into sections of about
+`SECTION_M`. Each section holds `MARGIN_M` of track each side of its core, so the band-pass
+filters of the quality bands settle (within about one longest wavelength, 70 m for D2)
+before the core; of each section only the core is kept, and the cores joined give what the
+whole track read at once gives.
 
 Sections are cut only at geometry samples that lie on a quality segment boundary (200 m
 apart from the first sample of the track) and start at such a sample: the segments, and the
@@ -19,8 +20,12 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
+import pandas as pd
 import xarray as xr
 
+from trackdyn.commands import plots
+from trackdyn.commands.tables import frame_table
+from trackdyn.errors import TrackdynInputError, require_positive
 from trackdyn.io import (
     CHUNK_ROWS,
     SupportRows,
@@ -29,14 +34,18 @@ from trackdyn.io import (
     rail_rows,
     support_pieces,
     supports_of,
+    write_netcdf,
 )
-from trackdyn.track.report import (
+from trackdyn.staging import output_folder
+from trackdyn.track.analysis import (
     SEGMENT_M,
     curve_picks,
     most_voided,
+    summary_table,
     track_dataset,
     voided_basin,
 )
+from trackdyn.track.rails import rail_section
 from trackdyn.track.track import RAILS, Geometry, Track
 
 SECTION_M = 10_000.0
@@ -205,7 +214,7 @@ def _read_curve(path, rail: str, position: float):
 
 
 def analyse_sections(geometry, supports, static_load, delta, rail_section, **options):
-    """The track job of `trackdyn.track.report` on a long track, section by section.
+    """The analysis of `trackdyn.track.analysis` on a long track, section by section.
 
     Parameters
     ----------
@@ -266,3 +275,69 @@ def _join(parts: list[xr.Dataset]) -> xr.Dataset:
         variables[name] = var if dim is None else xr.Variable.concat(pieces, dim)
     coords = {name: variables.pop(name) for name in first.coords}
     return xr.Dataset(variables, coords=coords, attrs=first.attrs)
+
+
+def write_track_outputs(ds: xr.Dataset, picks, basin, folder) -> pd.DataFrame:
+    """Write ``track.nc`` and the three track figures into ``folder``; return the summary.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Result of `trackdyn.track.analysis.track_dataset` (or of the sections of a long
+        track, joined).
+    picks : list of CurvePick
+        Curves of the load-deflection figure (`trackdyn.track.analysis.curve_picks`).
+    basin : tuple
+        Result of `trackdyn.track.analysis.voided_basin`.
+    folder : Path
+        Output folder.
+    """
+    ps, delta = ds.attrs["static_wheel_load_N"], ds.attrs["delta"]
+    write_netcdf(ds, folder / "track.nc")
+    plots.track_overview(ds, folder / "track_overview.png")
+    plots.load_deflection(picks, ps, delta, folder / "load_deflection.png")
+    plots.deflection_basin(*basin, ps, folder / "deflection_basin.png")
+    return summary_table(ds)
+
+
+def track(
+    geometry, supports, wheel_load_kN: float, delta: float, rail: str, extrapolate: bool,
+    out, overwrite: bool, console,
+) -> None:  # fmt: skip
+    """Analyse a track and write track.nc and three figures into ``out``.
+
+    Parameters
+    ----------
+    geometry, supports : path, optional
+        Geometry and supports CSV files; neither: the built-in 1 km example section.
+    wheel_load_kN : float
+        Static wheel load Ps [kN].
+    delta : float
+        Dynamic wheel load increment δ [-].
+    rail : str
+        Rail section name (`trackdyn.track.rails.rail_section`).
+    extrapolate : bool
+        Allow Ps ± ΔP beyond the measured curves.
+    out : Path
+        Output folder.
+    overwrite : bool
+        Replace another command's outputs in ``out``.
+    console : rich.console.Console
+        Where progress and the summary table are shown.
+    """
+    from trackdyn.data import EXAMPLE_GEOMETRY, EXAMPLE_SUPPORTS, example_path
+
+    require_positive("--wheel-load-kN", wheel_load_kN)
+    if (geometry is None) != (supports is None):
+        raise TrackdynInputError("give both --geometry and --supports, or neither for the example")
+    if geometry is None:
+        geometry, supports = example_path(EXAMPLE_GEOMETRY), example_path(EXAMPLE_SUPPORTS)
+    section = rail_section(rail)
+    with output_folder(out, "track", overwrite) as stage:
+        with console.status("reading and linearising the track, section by section"):
+            ds, picks, basin = analyse_sections(
+                geometry, supports, wheel_load_kN * 1e3, delta, section, extrapolate=extrapolate
+            )
+        table = write_track_outputs(ds, picks, basin, stage)
+    console.print(frame_table(table, f"Track summary ({ds.attrs['geometry_source']})"))
+    console.print(f"wrote track.nc and 3 figures to {out}")

@@ -15,8 +15,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.linalg import LinAlgError, solveh_banded
 
+from trackdyn.beam.elements import band_times, hermite, stiffness_band
 from trackdyn.errors import TrackdynInputError, shown
-from trackdyn.track.beam_elements import band_times, hermite, stiffness_band
 
 
 def _frozen(name, value, ndim):

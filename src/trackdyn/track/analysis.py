@@ -1,4 +1,4 @@
-"""The track job: everything `trackdyn track` computes, as one xarray Dataset.
+"""What `trackdyn track` computes, as one xarray Dataset, and the figures' data.
 
 Loaded profile and linearised stiffness (seed §5.2), D1/D2 longitudinal level quality, and
 the deflection basin over a voided sleeper (the situation of the seed's Fig 5.2).
@@ -17,7 +17,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from trackdyn.track.beam import linear_supports, solve_beam
+from trackdyn.beam.static import linear_supports, solve_beam
 from trackdyn.track.quality import longitudinal_level, segment_sd
 from trackdyn.track.track import RAILS, LinearisedTrack
 from trackdyn.units import GRAVITY
@@ -222,31 +222,6 @@ def curve_picks(k2: np.ndarray, ys: np.ndarray, position: np.ndarray, curve) -> 
                       float(k2[r, i]), float(ys[r, i]))
         )  # fmt: skip
     return picks
-
-
-def write_track_outputs(ds: xr.Dataset, picks, basin, folder) -> pd.DataFrame:
-    """Write ``track.nc`` and the three track figures into ``folder``; return the summary.
-
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        Result of `track_dataset` (or of the sections of a long track, joined).
-    picks : list of CurvePick
-        Curves of the load-deflection figure (`curve_picks`).
-    basin : tuple
-        Result of `voided_basin`.
-    folder : Path
-        Output folder.
-    """
-    from trackdyn import plots
-    from trackdyn.io import write_netcdf
-
-    ps, delta = ds.attrs["static_wheel_load_N"], ds.attrs["delta"]
-    write_netcdf(ds, folder / "track.nc")
-    plots.track_overview(ds, folder / "track_overview.png")
-    plots.load_deflection(picks, ps, delta, folder / "load_deflection.png")
-    plots.deflection_basin(*basin, ps, folder / "deflection_basin.png")
-    return summary_table(ds)
 
 
 def most_voided(lin: LinearisedTrack, sleepers=slice(None)) -> tuple[int, int]:

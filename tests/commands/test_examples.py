@@ -4,10 +4,11 @@ from pathlib import Path
 
 import pytest
 
+from trackdyn.commands.study import load_study
 from trackdyn.deterioration.calibration_spec import load_calibration
-from trackdyn.studies.scenarios import load_study, tasks
+from trackdyn.studies.scenarios import tasks
 
-EXAMPLES = Path(__file__).parents[1] / "examples"
+EXAMPLES = Path(__file__).parents[2] / "examples"
 
 
 def expected_runs(study) -> int:

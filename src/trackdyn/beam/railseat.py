@@ -30,8 +30,8 @@ import numpy as np
 from numba import njit
 from scipy.linalg import solveh_banded
 
+from trackdyn.beam.elements import element_stiffness, hermite, stiffness_band
 from trackdyn.errors import TrackdynInputError
-from trackdyn.track.beam_elements import element_stiffness, hermite, stiffness_band
 
 MAX_SWEEPS = 60
 """Active-set iterations allowed (rest state, and each batch of wheel positions)."""

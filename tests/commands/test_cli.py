@@ -4,10 +4,11 @@ import numpy as np
 import pandas as pd
 import pytest
 import xarray as xr
+from rich.console import Console
 from typer.testing import CliRunner
 
-from trackdyn import cli
-from trackdyn.cli import app, header
+from trackdyn.cli import app
+from trackdyn.commands.tables import frame_table, header
 from trackdyn.io import write_geometry, write_supports
 from trackdyn.track.synthetic import synthetic_track
 from trackdyn.vehicle.parameters import load_vehicle
@@ -240,15 +241,15 @@ def test_output_folder_belongs_to_one_command(tmp_path, short_track):
     assert "track.nc" not in names and {"study.csv", "notes.txt"} <= names
 
 
-def test_study_table_fits_80_columns_without_cutting_headers(monkeypatch):
+def test_study_table_fits_80_columns_without_cutting_headers():
     columns = ["vehicle", "damping", "case", "dyn_load_max_kN", "dyn_load_min_kN"]
     columns += ["dyn_load_sd_kN", "secondary_max_mm", "body_bounce_acc_rms_m_per_s2"]
     table = pd.DataFrame(
         [["loaded", "high", "iv", 25.0, -25.2, 6.65, 8.23, 0.543]], columns=columns
     )
     table["dominant_frequency_Hz"] = 1.52
-    monkeypatch.setattr(cli, "console", cli.Console(width=80, record=True))
-    cli._show(table, "matrix")
-    text = cli.console.export_text()
+    console = Console(width=80, record=True)
+    console.print(frame_table(table, "matrix"))
+    text = console.export_text()
     assert "…" not in text and "vehicle" in text and "damping" in text and "[m/s²]" in text
     assert max(len(line) for line in text.splitlines()) <= 80

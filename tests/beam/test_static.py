@@ -1,12 +1,12 @@
-"""Tests for the finite-element rail on discrete nonlinear supports (trackdyn.track.beam)."""
+"""Tests for the finite-element rail on discrete nonlinear supports (trackdyn.beam.static)."""
 
 import numpy as np
 import pytest
 from scipy.optimize import brentq
 
+from trackdyn.beam.static import SupportCurves, linear_supports, solve_beam
 from trackdyn.errors import TrackdynInputError
 from trackdyn.track import winkler
-from trackdyn.track.beam import SupportCurves, linear_supports, solve_beam
 from trackdyn.track.rails import rail_section
 
 EI = rail_section("60E1").EI  # 210 GPa * 3038 cm^4 = 6.38e6 N m^2 (EN 13674-1)

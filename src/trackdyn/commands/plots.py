@@ -76,7 +76,7 @@ def load_deflection(picks, static_load: float, delta: float, path) -> None:
     Parameters
     ----------
     picks : list of CurvePick
-        The sleepers (`trackdyn.track.report.curve_picks`).
+        The sleepers (`trackdyn.track.analysis.curve_picks`).
     static_load : float
         Static wheel load Ps [N].
     delta : float

@@ -1,0 +1,45 @@
+"""`trackdyn deteriorate`: the deterioration scenario run section by section on Dask."""
+
+from __future__ import annotations
+
+import dataclasses
+
+from trackdyn.commands.tables import deterioration_table
+from trackdyn.errors import require_workers
+from trackdyn.staging import output_folder
+
+
+def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> None:
+    """Predict the deterioration of every section; write its Datasets, tables and figures.
+
+    Parameters
+    ----------
+    scenario : path, optional
+        Deterioration scenario TOML file; None: the built-in example.
+    out : Path
+        Output folder.
+    overwrite : bool
+        Replace another command's outputs in ``out``.
+    workers : int, optional
+        Worker processes (default: one per core, 1 for one section).
+    scheduler : str, optional
+        Address of a running Dask scheduler.
+    console : rich.console.Console
+        Where the summary table is shown.
+    """
+    from trackdyn.deterioration.outputs import write_outputs
+    from trackdyn.deterioration.scenario import load_deterioration
+    from trackdyn.deterioration.sections import run_sections, section_tasks, summary
+
+    spec, base = load_deterioration(scenario)
+    require_workers(workers)
+    tasks = section_tasks(spec, base)
+    serial = scheduler is None and (workers == 1 or (workers is None and len(tasks) == 1))
+    if serial:
+        tasks = [dataclasses.replace(t, progress=True) for t in tasks]
+    with output_folder(out, "deteriorate", overwrite) as stage:
+        datasets = run_sections(tasks, workers=workers, scheduler=scheduler, progress=not serial)
+        files = write_outputs(datasets, stage)
+    title = f"Deterioration, {spec.run.model}: {len(datasets)} section(s)"
+    console.print(deterioration_table(summary(datasets), title))
+    console.print(f"wrote {len(files)} files (deterioration_*.nc, CSV tables, figures) to {out}")

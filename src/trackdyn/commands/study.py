@@ -1,0 +1,96 @@
+"""`trackdyn study`: the study file, the runs on Dask, the table, Dataset and figures."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from trackdyn.commands import plots
+from trackdyn.commands.tables import frame_table
+from trackdyn.io import write_netcdf
+from trackdyn.options import RunOptions, load_toml
+from trackdyn.staging import output_folder
+from trackdyn.studies.scenarios import Study
+
+
+def load_study(path=None) -> tuple[Study, Path]:
+    """The study in ``path`` (the built-in example: the 2-DOF §5.4.1 matrix, when None).
+
+    Parameters
+    ----------
+    path : path, optional
+        Study TOML file.
+    """
+    return load_toml(Study, path, Study(run=RunOptions(model="2dof")))
+
+
+def write_study(table, ds, study, folder) -> list[str]:
+    """Write ``study.nc``, ``study.csv`` and the figures into ``folder``; return the names.
+
+    A matrix study draws ``study_cases.png``, a one-at-a-time sensitivity study
+    ``tornado.png``, a speed study ``speed_sweep.png``; every study with a successful run
+    draws ``spectra.png``.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        One row per run (`trackdyn.studies.runner.gather`).
+    ds : xarray.Dataset
+        The same runs with their spectra.
+    study : Study
+        The study (its ``kind``).
+    folder : Path
+        Output folder.
+    """
+    write_netcdf(ds, folder / "study.nc")
+    table.to_csv(folder / "study.csv", index=False, float_format="%.4g")
+    names = ["study.nc", "study.csv"]
+    if not (table["error"] == "").any():
+        return names
+    figures = {
+        "matrix": ("study_cases.png", plots.study_matrix),
+        "speed": ("speed_sweep.png", plots.speed_sweep),
+    }
+    if not study.sensitivity.grid:
+        figures["sensitivity"] = ("tornado.png", plots.tornado)
+    if study.kind in figures:
+        name, draw = figures[study.kind]
+        draw(table, folder / name)
+        names.append(name)
+    plots.spectra(table, ds, folder / "spectra.png")
+    return [*names, "spectra.png"]
+
+
+def study(study_file, out, overwrite: bool, workers, scheduler, console) -> None:
+    """Run a study and write study.nc, study.csv and its figures into ``out``.
+
+    Parameters
+    ----------
+    study_file : path, optional
+        Study TOML file; None: the 2-DOF §5.4.1 matrix.
+    out : Path
+        Output folder.
+    overwrite : bool
+        Replace another command's outputs in ``out``.
+    workers : int, optional
+        Worker processes (default: one per core; 1: serial).
+    scheduler : str, optional
+        Address of a running Dask scheduler.
+    console : rich.console.Console
+        Where the table and failed runs are shown.
+    """
+    from trackdyn.studies.runner import gather, run_study
+    from trackdyn.studies.scenarios import tasks
+
+    spec, base = load_study(study_file)
+    runs = tasks(spec, base)
+    with output_folder(out, "study", overwrite) as stage:
+        results = run_study(runs, workers=workers, scheduler=scheduler, progress=True)
+        table, ds = gather(results)
+        ds.attrs.update(kind=spec.kind, model=spec.run.model)
+        write_study(table, ds, spec, stage)
+    title = f"{spec.kind} study, {spec.run.model}: {len(runs)} runs"
+    console.print(frame_table(table.drop(columns="error"), title))
+    for _, row in table[table["error"] != ""].iterrows():
+        labels = ", ".join(f"{c}={row[c]}" for c in runs[0].labels)
+        console.print(f"[red]failed[/red] ({labels}): {row['error']}")
+    console.print(f"wrote study.nc, study.csv and figures to {out}")
