@@ -165,7 +165,7 @@ def test_shipped_file_gives_value_unit_source_and_is_labelled_illustrative():
     assert load_law("power", kind="structure").K_s == pytest.approx(0.15e-3)
     assert load_law("power", kind="approach").K_s == pytest.approx(1e-3)
     assert load_law("power", kind="approach").Q_ref == law.Q_ref
-    with pytest.raises(TrackdynInputError, match=r"no table \[power.tunnel\].*known kinds: open"):
+    with pytest.raises(TrackdynInputError, match=r"unknown zone kind .*'tunnel'; known: open"):
         load_law("power", kind="tunnel")
     # settlement.toml: K_s between 0.01 and 10 mm, stiffness_exponent between -3 and 1
     bounds = law_bounds("power")
@@ -211,7 +211,9 @@ def test_bad_law_name_value_and_file(tmp_path):
         load_law("linear")
     with pytest.raises(TrackdynInputError, match="beta must be <= 1"):
         load_law("power", beta=1.5)
-    with pytest.raises(TrackdynInputError, match="unknown settlement parameter 'gamma'"):
+    with pytest.raises(
+        TrackdynInputError, match="unknown settlement parameter of the power law 'gamma'"
+    ):
         load_law("power", gamma=1.0)
     with pytest.raises(TrackdynInputError, match="cannot read the file"):
         load_law("power", tmp_path / "missing.toml")

@@ -146,10 +146,7 @@ def load_law(name: str, path=None, kind: str = "open", **overrides) -> LawParame
     if kind != "open":
         kinds = zone_kinds(name, path)
         if kind not in kinds:
-            raise TrackdynInputError(
-                f"{where}: no table [{name}.{kind}] for zones of kind {kind!r}; known kinds: "
-                + ", ".join(kinds)
-            )
+            raise unknown(f"zone kind (a table [{name}.<kind>])", kind, kinds, f"{where}: ")
         table = {**table, **_full_table(name, path)[1][kind]}
     label = f"[{name}]" if kind == "open" else f"[{name}.{kind}]"
     expected = law_units(name)
@@ -162,9 +159,9 @@ def load_law(name: str, path=None, kind: str = "open", **overrides) -> LawParame
         if isinstance(entry, dict):
             entry = {k: v for k, v in entry.items() if k not in BOUNDS}
         values[key] = si_value(entry, key, expected[key], f"{where}: {label}")
-    unknown = sorted(set(overrides) - set(expected))
-    if unknown:
-        raise TrackdynInputError(f"unknown settlement parameter {unknown[0]!r} for {name}")
+    extra = sorted(set(overrides) - set(expected))
+    if extra:
+        raise unknown(f"settlement parameter of the {name} law", extra[0], expected)
     values.update({k: float(v) for k, v in overrides.items()})
     missing = [k for k in expected if k not in values]
     if missing:

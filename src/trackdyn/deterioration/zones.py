@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from trackdyn.errors import TrackdynInputError, shown
+from trackdyn.errors import TrackdynInputError, shown, unknown
 
 KINDS = ("open", "structure", "approach")
 """Zone kinds with parameters in the shipped parameter file; a file may add its own."""
@@ -142,12 +142,9 @@ def read_zones(path, load) -> list[Zone]:
     missing = [c for c in ("start_m", "end_m", "kind") if c not in frame.columns]
     if missing:
         raise TrackdynInputError(f"{path}: no column {missing[0]!r} (start_m,end_m,kind)")
-    unknown = [c for c in frame.columns if c not in ("start_m", "end_m", "kind", *OPTIONAL)]
-    if unknown:
-        raise TrackdynInputError(
-            f"{path}: unknown column {unknown[0]!r}; known: start_m, end_m, kind, "
-            + ", ".join(OPTIONAL)
-        )
+    extra = [c for c in frame.columns if c not in ("start_m", "end_m", "kind", *OPTIONAL)]
+    if extra:
+        raise unknown("column", extra[0], ("start_m", "end_m", "kind", *OPTIONAL), f"{path}: ")
     if frame.empty:
         raise TrackdynInputError(f"{path}: no zones listed")
     zones = []
