@@ -12,6 +12,8 @@ from trackdyn.track.track import Track
 
 EXAMPLE_GEOMETRY = "example_geometry.csv"
 EXAMPLE_SUPPORTS = "example_supports.csv"
+EXAMPLE_ZONES = "example_zones.csv"
+"""Zones of the example for `trackdyn deteriorate`: its 40 m structure and approaches."""
 
 
 def example_path(name: str) -> Path:

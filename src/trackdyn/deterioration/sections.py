@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from trackdyn.data import EXAMPLE_ZONES, example_path, load_track
 from trackdyn.deterioration.law_files import load_law
 from trackdyn.deterioration.loop import LoopOptions, predict
 from trackdyn.deterioration.scenario import loop_options, resolve_inputs
@@ -99,7 +100,8 @@ def read_sections(path) -> list[Section]:
 
 
 def sections_of(spec, base: Path) -> list[Section]:
-    """The sections a scenario names: a list, one pair of files, or the example.
+    """The sections a scenario names: a list, one pair of files, or the example (with its
+    zones, `trackdyn.data.EXAMPLE_ZONES`, unless ``[track] zones`` gives others).
 
     Parameters
     ----------
@@ -117,7 +119,7 @@ def sections_of(spec, base: Path) -> list[Section]:
             raise TrackdynInputError(f"track.zones: {base / t.zones}: no such file")
         zones = str((base / t.zones).resolve())
     if t.geometry is None:
-        return [Section("example", zones=zones)]
+        return [Section("example", zones=zones or str(example_path(EXAMPLE_ZONES)))]
     files = [base / t.geometry, base / t.supports]
     for key, file in zip(("geometry", "supports"), files, strict=True):
         if not file.is_file():
@@ -167,7 +169,6 @@ def run_section(task: SectionTask) -> dict:
     dict
         ``name`` and ``dataset``, or ``name`` and ``error``.
     """
-    from trackdyn.data import load_track
 
     name = task.section.name
     try:
