@@ -11,7 +11,7 @@ from trackdyn.options import RunOptions
 from trackdyn.track.synthetic import SoftSpot, Transition, VoidedSleepers, synthetic_track
 from trackdyn.vehicle.parameters import load_vehicle
 
-PASSAGES = 8065.0  # 1e6 t / (104 t + 20 t), the coal traffic [per MGT]
+PASSAGES = 8065.0  # 1e6 t / (104 t + 20 t), the example's coal traffic [per MGT]
 LAW = load_law("power")  # the shipped illustrative parameters
 LOADED = Traffic(load_vehicle("loaded"), 60 / 3.6, PASSAGES, "loaded")
 EMPTY = Traffic(load_vehicle("empty"), 60 / 3.6, PASSAGES, "empty")
@@ -54,7 +54,7 @@ def test_uniform_level_track_stays_level(uniform, traffic):
     x = ds.sleeper_distance
     inner = e.where((x > 6.0) & (x < 114.0), drop=True).values
     assert (inner.max() - inner.min()) / inner.mean() < 1e-3
-    assert float(ds.d1_sd.max()) < 0.01  # mm at 50 MGT, the criterion
+    assert float(ds.d1_sd.max()) < 0.01  # mm at 50 MGT: level track stays level (0 exactly)
     assert int(ds.hanging_sleepers.max()) == 0
 
 

@@ -15,7 +15,8 @@ def test_linear_support_gives_k():
 
 
 def test_printed_5_10_is_one_over_two_delta_times_secant():
-    # seed-notes.md: the printed numerator Ps gives 1/(2 delta) = 1.667 times the slope.
+    # docs/model.md, departures from the printed 5.10: the numerator Ps gives 1/(2 delta)
+    # = 1.667 times the slope.
     k2, _ = secant_linearisation(SupportCurve.linear(80e6), 127.5e3, 0.3, printed_5_10=True)
     assert k2 == pytest.approx(80e6 / 0.6, rel=1e-12)
 

@@ -8,7 +8,7 @@ from trackdyn.errors import TrackdynInputError
 from trackdyn.track import winkler
 from trackdyn.track.rails import rail_section
 
-EI_60E1 = 210e9 * 3038e-8  # E = 210 GPa, I = 3038 cm^4 (data.md) -> 6.3798e6 N m^2
+EI_60E1 = 210e9 * 3038e-8  # E = 210 GPa, I = 3038 cm^4 (EN 13674-1, 60E1 profile) -> 6.3798e6 N m^2
 U = 40e6  # track modulus [N/m^2], a mid-range ballasted-track value
 
 

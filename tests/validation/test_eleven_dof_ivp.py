@@ -117,7 +117,7 @@ class SeedEquations:
     def friction(self, vel, d):
         """5.30: wedge friction force at relative velocity ``vel`` and displacement ``d``.
 
-        The wedge spring cannot pull (seed-notes.md): negative normal force is zero.
+        The wedge spring cannot pull (docs/model.md, departures): negative normal force is zero.
         """
         *_, kss, xss, mu, ta, cs = self.p
         normal = max(xss + d, 0.0) * kss
