@@ -55,7 +55,7 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
         ),
         "secondary_displacement": (
             ("time", "suspension"),
-            out["sd"],
+            out["secondary"],
             {
                 "units": "m",
                 "long_name": "displacement across the secondary suspension, compression positive",

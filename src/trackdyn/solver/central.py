@@ -74,7 +74,7 @@ def advance(
     ds_idx, ds_val, H, jinv, wedge, contact, static_load,
     k_in, r_in, table, y_start, y_step,
     z, dt, step0, store_every, max_iter,
-    out_q, out_v, out_a, out_wl, out_sd, out_fw, out_vw, out_k, out_r,
+    out_q, out_v, out_a, out_wl, out_secondary, out_fw, out_vw, out_k, out_r,
 ):  # fmt: skip
     """Advance one run ``k_in.shape[0]`` steps from ``z = [q0, q-1]``, updated in place.
 
@@ -200,7 +200,7 @@ def advance(
                 d = 0.0
                 for j in range(ds_idx.shape[1]):
                     d += ds_val[u, j] * z[ds_idx[u, j]]
-                out_sd[stored, u] = d
+                out_secondary[stored, u] = d
             for w in range(nw):
                 out_fw[stored, w] = F[w]
                 out_vw[stored, w] = v[w]
@@ -218,7 +218,7 @@ def advance_batch(
     ds_idx, ds_val, H, jinv, wedge, contact, static_load,
     k_in, r_in, table, y_start, y_step, in_start,
     z, dt, step0, store_every, max_iter, row0,
-    out_q, out_v, out_a, out_wl, out_sd, out_fw, out_vw, out_k, out_r, status,
+    out_q, out_v, out_a, out_wl, out_secondary, out_fw, out_vw, out_k, out_r, status,
 ):  # fmt: skip
     """`advance` for a batch of runs, in parallel over the runs.
 
@@ -239,7 +239,7 @@ def advance_batch(
                 wedge[b], contact[b], static_load[b],
                 k_in[lo:hi], r_in[lo:hi], tab, y_start[b], y_step[b],
                 z[b], dt[b], step0[b], store_every[b], max_iter,
-                out_q[r0:], out_v[r0:], out_a[r0:], out_wl[r0:], out_sd[r0:], out_fw[r0:],
+                out_q[r0:], out_v[r0:], out_a[r0:], out_wl[r0:], out_secondary[r0:], out_fw[r0:],
                 out_vw[r0:], out_k[r0:], out_r[r0:],
             )  # fmt: skip
 

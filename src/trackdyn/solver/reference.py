@@ -115,7 +115,7 @@ def solve(p: Problem, advanced=None):
         q, v = y[:n], y[n:]
         fc, fw, k, r = eq.forces(t, q, v)
         out["q"][i], out["v"][i], out["a"][i] = q, v, eq.acceleration(t, q, v, fc, fw)
-        out["wl"][i], out["sd"][i] = wheel_load(m, fc, m.Dc @ v), m.Ds @ q
+        out["wl"][i], out["secondary"][i] = wheel_load(m, fc, m.Dc @ v), m.Ds @ q
         out["fw"][i], out["vw"][i] = fw, m.Dw @ v
         out["k"][i], out["r"][i] = k, r
     bad = ~np.isfinite(out["q"]).all(axis=1)

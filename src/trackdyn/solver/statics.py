@@ -20,7 +20,7 @@ from numba import njit
 
 from trackdyn.errors import TrackdynInputError
 
-OUTPUTS = ("q", "v", "a", "wl", "sd", "fw", "vw", "k", "r")
+OUTPUTS = ("q", "v", "a", "wl", "secondary", "fw", "vw", "k", "r")
 """Stored arrays, (stored steps, width): displacement [m], velocity [m/s], acceleration
 [m/s²] per dof; wheel load, static and track damping included (mean of the contact's
 wheels, `wheel_load`) [N]; displacement across each secondary suspension ``Ds q`` [m];
@@ -69,7 +69,7 @@ def widths(model) -> dict[str, int]:
     """Columns of each of the `OUTPUTS` arrays for ``model``."""
     n, nc, nw = len(model.dof_names), len(model.contact_names), len(model.wedge_names)
     ns = len(model.suspension_names)
-    return dict(q=n, v=n, a=n, wl=nc, sd=ns, fw=nw, vw=nw, k=nc, r=nc)
+    return dict(q=n, v=n, a=n, wl=nc, secondary=ns, fw=nw, vw=nw, k=nc, r=nc)
 
 
 def contact_table(model) -> np.ndarray:
