@@ -169,3 +169,20 @@ def test_bad_zone_tables_are_refused_naming_file_and_line(level, tmp_path, text,
     with pytest.raises(TrackdynInputError, match=message) as info:
         check_zones(read_zones(path, load), (0.0, 60.0), str(path))
     assert str(path) in str(info.value) and "\n" not in str(info.value)
+
+
+def test_runaway_settlement_is_refused_quickly():
+    """A law at the ends of the shipped fit bounds (K_s 10 mm, load exponent 5), the kind
+    of trial a calibration's optimiser proposes, on a soft spot: the dip deepens, the
+    dynamic load with it, and steps shrink below one passage. The loop refuses after ten
+    such steps instead of crawling to max_steps (which made each such trial of the
+    calibration tests cost minutes)."""
+
+    from trackdyn.track.synthetic import SoftSpot
+
+    spot = SoftSpot(centre=30.0, length=8.0, factor=0.45, gap=1.5e-3)
+    trk = synthetic_track(60.0, spectrum="fra5", seed=3, features=(spot,))
+    law = load_law("power", K_s=10e-3, load_exponent=5.0)
+    with pytest.raises(TrackdynInputError, match="settlement runs away at"):
+        predict(trk, [wagon(26.0, PASSAGES), wagon(5.0, PASSAGES)], law,
+                options(max_step_settlement=2e-3, start="as surveyed"))  # fmt: skip

@@ -200,6 +200,11 @@ TRAIN_ALLOWANCE = 10.0
 within it [-]: a train that settles a sleeper 10 times the limit (5 mm by default)
 changes its own wheel loads too much to keep them over the train."""
 
+RUNAWAY_STEPS = 10
+"""Steps in a row, each shorter than one passage of the traffic, after which the loop
+refuses to go on: every passage settling a sleeper by the step limit is runaway
+settlement (a law far outside its range), not deterioration."""
+
 MAX_LOAD_UPDATES = 2000
 """Rail-seat load updates allowed within one step (each a beam solve) before giving up."""
 
@@ -306,6 +311,13 @@ def predict(track: Track, traffic, law, options=None, *, zones=(), progress=Fals
                 raise TrackdynInputError(
                     f"more than max_steps = {o.max_steps} steps needed to reach {total:g} MGT "
                     f"(at {mgt:.3g} MGT); raise max_step_settlement or max_steps"
+                )
+            lengths = np.diff(np.array(steps["start"][-RUNAWAY_STEPS:] + [mgt]))
+            if per_mgt > 0 and lengths.size == RUNAWAY_STEPS and np.all(lengths * per_mgt < 1):
+                raise TrackdynInputError(
+                    f"settlement runs away at {mgt:.3g} MGT: {RUNAWAY_STEPS} steps in a row "
+                    f"shorter than one passage each settled a sleeper by max_step_settlement; "
+                    "check the settlement law's parameters"
                 )
             clock = time.perf_counter()
             current = {p: ballast.linearised(lin, state, geometry) for p, lin in lins.items()}
