@@ -160,7 +160,7 @@ def memory(law, shape, vehicles: int) -> Hardening:
 
 
 class Zoned:
-    """One accumulator per zone, each applying to its own rail seats.
+    """One accumulator per zone, each on its own sleepers only.
 
     Parameters
     ----------
@@ -173,19 +173,27 @@ class Zoned:
     """
 
     def __init__(self, laws, shape, vehicles: int):
-        self.parts = [(np.broadcast_to(m, shape), memory(law, shape, vehicles))
-                      for m, law in laws]  # fmt: skip
+        self.shape, self.vehicles = shape, vehicles
+        held = [(np.flatnonzero(m), law) for m, law in laws]
+        self.parts = [(i, memory(law, (shape[0], i.size), vehicles)) for i, law in held if i.size]
 
     @property
     def N(self) -> np.ndarray:
         """Load cycles applied per rail and sleeper [-]."""
-        return self.parts[0][1].N
+        return self._join((i, acc.N) for i, acc in self.parts)
+
+    def _join(self, pieces, lead=()) -> np.ndarray:
+        out = np.zeros((*lead, *self.shape))
+        for i, values in pieces:
+            out[..., i] = values
+        return out
 
     def prepare(self, cycles):
         """See `Hardening.prepare`."""
-        incs = [(m, acc.prepare(cycles)) for m, acc in self.parts]
-        return lambda dm: sum(np.where(m, inc(dm), 0.0) for m, inc in incs)
+        incs = [(i, acc.prepare([(v, r, w, q[i], k2[i]) for v, r, w, q, k2 in cycles]))
+                for i, acc in self.parts]  # fmt: skip
+        return lambda dm: self._join((i, inc(dm)) for i, inc in incs)
 
     def advance(self, dm: float) -> np.ndarray:
         """See `Hardening.advance`."""
-        return sum(np.where(m, acc.advance(dm), 0.0) for m, acc in self.parts)
+        return self._join(((i, acc.advance(dm)) for i, acc in self.parts), (self.vehicles,))

@@ -275,9 +275,10 @@ def _hurwitz(s: float, a):
         shift += q**-s
         q = q + 1.0
     a[small] = q
-    tail = (a ** (1 - s) / (s - 1) + a**-s / 2 + s * a ** (-s - 1) / 12
-            - s * (s + 1) * (s + 2) * a ** (-s - 3) / 720
-            + s * (s + 1) * (s + 2) * (s + 3) * (s + 4) * a ** (-s - 5) / 30240)  # fmt: skip
+    inv2 = a**-2.0
+    p = a**-s  # a^-s; the other powers from it by products
+    tail = p * (a / (s - 1) + 0.5 + (s / 12) / a * (1 - inv2 * ((s + 1) * (s + 2) / 60
+            - inv2 * (s + 1) * (s + 2) * (s + 3) * (s + 4) / 2520)))  # fmt: skip
     out[:] = tail
     out[small] += shift
     return out
