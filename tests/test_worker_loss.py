@@ -14,10 +14,13 @@ from pathlib import Path
 
 import pandas as pd
 import psutil
+import pytest
 
 from trackdyn.options import RunOptions
 from trackdyn.parallel import run_tasks
 from trackdyn.studies.runner import Task, gather, run_task
+
+pytestmark = pytest.mark.slow  # a real cluster whose worker is killed
 
 SPEEDS_KMH = [30.0, 40.0, 50.0, 60.0, 70.0, 80.0]
 MARKERS = "TRACKDYN_TEST_MARKERS"

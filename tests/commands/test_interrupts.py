@@ -13,6 +13,8 @@ import time
 
 import pytest
 
+pytestmark = pytest.mark.slow  # each command runs five times as a subprocess
+
 GRACE = 3.0  # [s] allowed between the signal and the end of the process
 FRACTIONS = (0.15, 0.5, 0.85, 0.97)  # of the uninterrupted run's wall time
 

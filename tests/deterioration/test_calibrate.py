@@ -24,6 +24,8 @@ from trackdyn.track.synthetic import SoftSpot, synthetic_track
 from trackdyn.track.track import Geometry
 from trackdyn.vehicle.parameters import load_vehicle
 
+pytestmark = pytest.mark.slow  # fits run dozens of deterioration loops
+
 runner = CliRunner()
 
 TRUE = {"K_s": 0.8e-3, "load_exponent": 2.5}  # the values the surveys are made with [SI]
