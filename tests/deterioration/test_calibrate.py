@@ -12,12 +12,13 @@ import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
+from trackdyn.calibration.fit import Objective
+from trackdyn.calibration.problem import prepare, synthetic_surveys
+from trackdyn.calibration.surveys import align
 from trackdyn.cli import app
 from trackdyn.deterioration import LoopOptions, Traffic, load_law
-from trackdyn.deterioration.calibrate import prepare, synthetic_surveys
 from trackdyn.deterioration.calibration_spec import load_calibration
-from trackdyn.deterioration.fitting import Objective
-from trackdyn.deterioration.surveys import align, surveyed_geometry
+from trackdyn.deterioration.starts import surveyed_geometry
 from trackdyn.io import write_geometry, write_supports
 from trackdyn.options import RunOptions
 from trackdyn.track.synthetic import SoftSpot, synthetic_track

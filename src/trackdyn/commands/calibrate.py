@@ -25,10 +25,10 @@ def calibrate(calibration, out, overwrite: bool, workers, scheduler, console) ->
     console : rich.console.Console
         Where the alignments, the fit's progress and its result are shown.
     """
-    from trackdyn.deterioration.calibrate import prepare
+    from trackdyn.calibration.fit import fit
+    from trackdyn.calibration.problem import prepare
     from trackdyn.deterioration.calibration_outputs import sd_errors, write_calibration
     from trackdyn.deterioration.calibration_spec import load_calibration
-    from trackdyn.deterioration.fitting import fit
     from trackdyn.deterioration.law_files import law_units
     from trackdyn.parallel import shared_cluster
 

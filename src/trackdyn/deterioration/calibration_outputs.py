@@ -8,11 +8,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from trackdyn.calibration.fit import FitResult
+from trackdyn.calibration.problem import Problem
+from trackdyn.calibration.surveys import d1_change
 from trackdyn.deterioration import plots
-from trackdyn.deterioration.calibrate import Problem
-from trackdyn.deterioration.fitting import FitResult
 from trackdyn.deterioration.law_files import BOUNDS, law_file_table, law_units
-from trackdyn.deterioration.surveys import d1_change
 from trackdyn.track.quality import segment_sd
 from trackdyn.track.track import RAILS
 from trackdyn.units import UNITS

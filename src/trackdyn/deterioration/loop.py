@@ -60,8 +60,7 @@ from trackdyn.deterioration.accumulation import Zoned
 from trackdyn.deterioration.ballast import Ballast, rate_field
 from trackdyn.deterioration.loads import TrafficRun, rail_seat_loads, vehicle_runs
 from trackdyn.deterioration.results import d1_sd, make_dataset
-from trackdyn.deterioration.surveys import surveyed_geometry
-from trackdyn.deterioration.tamping import STARTS, tamped_geometry
+from trackdyn.deterioration.starts import STARTS, surveyed_geometry, tamped_geometry
 from trackdyn.deterioration.zones import check_zones
 from trackdyn.errors import TrackdynInputError, require_positive, shown
 from trackdyn.options import RunOptions
@@ -139,9 +138,9 @@ class LoopOptions:
         Travel between stored simulation samples [m] (sets ``store_every``).
     start : str
         ``"as measured"``: the track as its files give it; ``"tamped"``: freshly tamped
-        (`trackdyn.deterioration.tamping`: most of the D1 band removed, sleepers seated);
+        (`trackdyn.deterioration.starts`: most of the D1 band removed, sleepers seated);
         ``"as surveyed"``: as measured without the wavelengths under 3 m, mostly
-        measurement noise (`trackdyn.deterioration.surveys.surveyed_geometry`).
+        measurement noise (`trackdyn.deterioration.starts.surveyed_geometry`).
     snapshot_mgt : tuple of float
         Further tonnages at which to store a geometry snapshot, e.g. those of surveys
         [MGT]; those beyond ``total_mgt`` are ignored.

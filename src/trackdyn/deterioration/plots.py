@@ -125,9 +125,9 @@ def calibration(problem, result, path) -> None:
 
     Parameters
     ----------
-    problem : trackdyn.deterioration.calibrate.Problem
+    problem : trackdyn.calibration.problem.Problem
         The calibration.
-    result : trackdyn.deterioration.fitting.FitResult
+    result : trackdyn.calibration.fit.FitResult
         The fit.
     path : path
         PNG file to write.

@@ -1,7 +1,7 @@
 """Fit settlement-law parameters to repeated geometry surveys (`trackdyn calibrate`).
 
 The calibration file is read by `trackdyn.deterioration.calibration_spec`. Each later
-survey is aligned to the first (`trackdyn.deterioration.surveys`). The model runs from the
+survey is aligned to the first (`trackdyn.calibration.surveys`). The model runs from the
 first survey (``[track] start``, default as surveyed: wavelengths under 3 m removed) over
 the tonnage to each later one (its cycle count starts there: only tonnage differences
 enter); each survey is aligned again to the profile predicted for it; the residuals are
@@ -34,11 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from trackdyn.deterioration.calibration_spec import CalibrationScenario
-from trackdyn.deterioration.law_files import law_bounds, law_units
-from trackdyn.deterioration.scenario import loop_options, resolve_inputs
-from trackdyn.deterioration.sections import Section, SectionTask, run_section, run_sections
-from trackdyn.deterioration.surveys import (
+from trackdyn.calibration.surveys import (
     REFINE,
     align,
     common_grid,
@@ -46,6 +42,10 @@ from trackdyn.deterioration.surveys import (
     profiles_at,
     read_survey,
 )
+from trackdyn.deterioration.calibration_spec import CalibrationScenario
+from trackdyn.deterioration.law_files import law_bounds, law_units
+from trackdyn.deterioration.scenario import loop_options, resolve_inputs
+from trackdyn.deterioration.sections import Section, SectionTask, run_section, run_sections
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import read_supports
 from trackdyn.track.quality import WAVEBANDS
