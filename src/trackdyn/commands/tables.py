@@ -89,7 +89,7 @@ def deterioration_table(table, title: str) -> Table:
     Parameters
     ----------
     table : pandas.DataFrame
-        `trackdyn.deterioration.sections.summary`: settlement [mm], D1 SD [mm], tonnages
+        `trackdyn.commands.deteriorate.outputs.summary`: settlement [mm], D1 SD [mm], tonnages
         [MGT].
     title : str
         Title above the table.
@@ -115,7 +115,7 @@ def alignment_table(spec, problem) -> Table:
 
     Parameters
     ----------
-    spec : trackdyn.deterioration.calibration_spec.CalibrationScenario
+    spec : trackdyn.commands.calibrate.spec.CalibrationScenario
         The calibration file (its surveys).
     problem : trackdyn.calibration.problem.Problem
         The prepared fit (alignments, which surveys are fitted).

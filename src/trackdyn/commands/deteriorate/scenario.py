@@ -61,9 +61,8 @@ from pydantic import (
 )
 
 from trackdyn.errors import TrackdynInputError
-from trackdyn.io import read_toml
 from trackdyn.limits import MAX_SPEED_KMH
-from trackdyn.options import RunOptions, Strict, parse, vehicle_source
+from trackdyn.options import RunOptions, Strict, load_toml, vehicle_source
 
 
 class TrafficSpec(Strict):
@@ -182,11 +181,7 @@ def load_deterioration(path=None) -> tuple[DeteriorationScenario, Path]:
     path : path, optional
         Scenario TOML file.
     """
-    if path is None:
-        return DeteriorationScenario(), Path.cwd()
-    path = Path(path)
-    spec = parse(DeteriorationScenario, read_toml(path), str(path))
-    return spec, path.resolve().parent
+    return load_toml(DeteriorationScenario, path)
 
 
 def loop_options(spec: DeteriorationScenario, seed, example: bool = False):
