@@ -217,13 +217,12 @@ def prepare(spec, base: Path, traffic, law, options) -> Problem:
         raise TrackdynInputError("fit.ignore_m: leaves no distance to compare the surveys on")
     mgt = np.array([s.mgt - spec.survey[0].mgt for s in spec.survey])
     fitted = np.array([i > 0 and not s.check for i, s in enumerate(spec.survey)])
-    options = dataclasses.replace(
-        options,
-        total_mgt=float(mgt[-1]),
-        snapshot_every_mgt=float(mgt[-1]),
-        snapshot_mgt=tuple(float(m) for m in mgt[1:]),
-    )
-    fit_options = dataclasses.replace(options, total_mgt=float(mgt[fitted].max()))
+    options = options.model_copy(update={
+        "total_mgt": float(mgt[-1]),
+        "snapshot_every_mgt": float(mgt[-1]),
+        "snapshot_mgt": tuple(float(m) for m in mgt[1:]),
+    })  # fmt: skip
+    fit_options = options.model_copy(update={"total_mgt": float(mgt[fitted].max())})
     section = Section("calibration", str(files[0].resolve()), str(supports_file.resolve()))
     first = profiles_at(geometries[0], 0.0, x)
     return Problem(spec, base, section, tuple(traffic), law, names, log, lower, upper, mgt,
@@ -354,8 +353,9 @@ def synthetic_surveys(track, traffic, law, options, mgt, *, noise=0.3e-3, offset
     """
     from trackdyn.deterioration.loop import predict
 
-    o = dataclasses.replace(options, total_mgt=float(mgt[-1]), snapshot_every_mgt=float(mgt[-1]),
-                            snapshot_mgt=tuple(float(m) for m in mgt[1:]))  # fmt: skip
+    o = options.model_copy(update={"total_mgt": float(mgt[-1]),
+                                   "snapshot_every_mgt": float(mgt[-1]),
+                                   "snapshot_mgt": tuple(float(m) for m in mgt[1:])})  # fmt: skip
     ds = predict(track, traffic, law, o)
     rng = np.random.default_rng(seed)
     x = track.geometry.distance
