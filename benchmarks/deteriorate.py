@@ -13,8 +13,9 @@ import argparse
 import dataclasses
 import time
 
-from trackdyn.deterioration.scenario import load_deterioration
-from trackdyn.deterioration.sections import run_section, section_tasks
+from trackdyn.commands.deteriorate.scenario import load_deterioration
+from trackdyn.commands.deteriorate.sections import section_tasks
+from trackdyn.deterioration.runs import run_section
 
 
 def main():

@@ -17,8 +17,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from trackdyn.deterioration.scenario import load_deterioration
-from trackdyn.deterioration.sections import run_section, section_tasks
+from trackdyn.commands.deteriorate.scenario import load_deterioration
+from trackdyn.commands.deteriorate.sections import section_tasks
+from trackdyn.deterioration.runs import run_section
 from trackdyn.io import write_geometry, write_supports
 from trackdyn.parallel import run_tasks
 from trackdyn.track.synthetic import synthetic_track

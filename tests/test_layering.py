@@ -11,16 +11,6 @@ PACKAGE = Path(trackdyn.__file__).parent
 COMMAND_LAYER = ("trackdyn.cli", "trackdyn.__main__", "trackdyn.commands")
 """Modules (and packages) that may read options, write files and draw figures."""
 
-PENDING_MOVES = {
-    # Command-layer modules of `trackdyn deteriorate` and `trackdyn calibrate` still in the
-    # library; each leaves this list when it moves under trackdyn.commands.
-    "trackdyn.deterioration.plots",  # the deterioration and calibration figures
-    "trackdyn.deterioration.outputs",  # deteriorate's files
-    "trackdyn.deterioration.scenario",  # deteriorate's scenario file
-    "trackdyn.deterioration.sections",  # deteriorate's sections run on Dask
-    "trackdyn.deterioration.calibration_outputs",  # calibrate's files
-}
-
 
 def module_name(path: Path) -> str:
     parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
@@ -87,9 +77,9 @@ def forbidden(name: str) -> bool:
     return plotting or _within(name, COMMAND_LAYER)
 
 
-def layering_violations(imported: dict[str, set[str]], pending=PENDING_MOVES) -> list[str]:
+def layering_violations(imported: dict[str, set[str]]) -> list[str]:
     """``module -> name`` for each library module importing what `forbidden` names."""
-    library = [m for m in imported if not _within(m, COMMAND_LAYER) and m not in pending]
+    library = [m for m in imported if not _within(m, COMMAND_LAYER)]
     return sorted(f"{m} -> {n}" for m in library for n in imported[m] if forbidden(n))
 
 
@@ -115,7 +105,7 @@ def test_the_checker_finds_a_library_module_reaching_up():
         "trackdyn.cli": {"trackdyn.commands.run"},
         "trackdyn.__main__": {"trackdyn.cli"},
     }
-    assert layering_violations(imported, pending=set()) == [
+    assert layering_violations(imported) == [
         "trackdyn.track.a -> trackdyn.commands.run",
         "trackdyn.track.a -> trackdyn.commands.run.Scenario",
         "trackdyn.track.b -> trackdyn.cli",
@@ -123,13 +113,9 @@ def test_the_checker_finds_a_library_module_reaching_up():
         "trackdyn.track.d -> trackdyn.vehicle.plots",
         "trackdyn.track.e -> trackdyn.commands.plots",
     ]
-    assert "trackdyn.track.b -> trackdyn.cli" not in layering_violations(
-        imported, pending={"trackdyn.track.b"}
-    )
     assert not forbidden("trackdyn.commandsx") and forbidden("trackdyn.commands")
 
 
 def test_library_modules_do_not_import_commands_cli_or_plots():
     imported = imported_names()
     assert layering_violations(imported) == []
-    assert PENDING_MOVES <= set(imported), "a pending move is done: take it off PENDING_MOVES"

@@ -11,8 +11,8 @@ seen to find those values again:
 
 from pathlib import Path
 
+from trackdyn.calibration.problem import synthetic_surveys
 from trackdyn.deterioration import LoopOptions, Traffic, load_law
-from trackdyn.deterioration.calibrate import synthetic_surveys
 from trackdyn.io import write_geometry, write_supports
 from trackdyn.options import RunOptions
 from trackdyn.track.synthetic import SoftSpot, synthetic_track

@@ -4,8 +4,8 @@ from pathlib import Path
 
 import pytest
 
+from trackdyn.commands.calibrate.spec import load_calibration
 from trackdyn.commands.study import load_study
-from trackdyn.deterioration.calibration_spec import load_calibration
 from trackdyn.studies.scenarios import tasks
 
 EXAMPLES = Path(__file__).parents[2] / "examples"

@@ -89,7 +89,7 @@ def deterioration_table(table, title: str) -> Table:
     Parameters
     ----------
     table : pandas.DataFrame
-        `trackdyn.deterioration.sections.summary`: settlement [mm], D1 SD [mm], tonnages
+        `trackdyn.commands.deteriorate.outputs.summary`: settlement [mm], D1 SD [mm], tonnages
         [MGT].
     title : str
         Title above the table.
@@ -115,9 +115,9 @@ def alignment_table(spec, problem) -> Table:
 
     Parameters
     ----------
-    spec : trackdyn.deterioration.calibration_spec.CalibrationScenario
+    spec : trackdyn.commands.calibrate.spec.CalibrationScenario
         The calibration file (its surveys).
-    problem : trackdyn.deterioration.calibrate.Problem
+    problem : trackdyn.calibration.problem.Problem
         The prepared fit (alignments, which surveys are fitted).
     """
     show = Table(title="Surveys aligned to the first (D1-band cross-correlation)")
@@ -136,9 +136,9 @@ def fitted_table(law: str, problem, result, units: dict) -> Table:
     ----------
     law : str
         Settlement law name.
-    problem : trackdyn.deterioration.calibrate.Problem
+    problem : trackdyn.calibration.problem.Problem
         The fit (parameter names).
-    result : trackdyn.deterioration.fitting.FitResult
+    result : trackdyn.calibration.fit.FitResult
         The fit's result.
     units : dict
         SI unit per parameter name.

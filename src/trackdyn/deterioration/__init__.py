@@ -1,8 +1,8 @@
 """Track deterioration over accumulated traffic: dynamic loads, settlement, new geometry.
 
 ``predict`` runs the loop on one section; ``load_law`` reads a settlement law and its
-parameters; `trackdyn.deterioration.sections` reads scenario files and runs many sections
-through Dask.
+parameters; `trackdyn.deterioration.runs` runs many sections (or laws) through Dask; the
+start states (tamped, as measured, as surveyed) are `trackdyn.deterioration.starts`.
 """
 
 from trackdyn.deterioration.law_files import load_law

@@ -22,6 +22,7 @@ the parameters that differ there, each again with value, unit and source::
 
 from __future__ import annotations
 
+import json
 from importlib.resources import files
 
 from trackdyn.deterioration.settlement import LAWS, LawParameters
@@ -123,6 +124,35 @@ def law_bounds(name: str, path=None) -> dict[str, tuple[float, float]]:
                 raise TrackdynInputError(f"{where}: [{name}] {key} needs min < max")
             bounds[key] = (lo, hi)
     return bounds
+
+
+def law_table_toml(name: str, entries: dict, description: str | None = None) -> str:
+    """A law's table of a parameter file as TOML text, read back by `load_law`.
+
+    Parameters
+    ----------
+    name : str
+        Law name, the table's header ``[<name>]``.
+    entries : dict
+        Per parameter: its ``value``, ``unit``, optionally ``min`` and ``max``, and its
+        ``source``, in the file's units.
+    description : str, optional
+        The table's ``description``.
+    """
+    lines = [f"[{name}]"]
+    if description is not None:
+        lines.append(f"description = {json.dumps(description)}")
+    lines += [f"{key} = {_entry_toml(entry)}" for key, entry in entries.items()]
+    return "\n".join(lines) + "\n"
+
+
+def _entry_toml(entry: dict) -> str:
+    keys = ["value", "unit", *[b for b in BOUNDS if b in entry], "source"]
+    parts = []
+    for key in keys:
+        v = entry[key]
+        parts.append(f"{key} = {json.dumps(v) if isinstance(v, str) else format(v, '.6g')}")
+    return "{ " + ", ".join(parts) + " }"
 
 
 def load_law(name: str, path=None, kind: str = "open", **overrides) -> LawParameters:

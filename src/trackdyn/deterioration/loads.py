@@ -22,10 +22,6 @@ from trackdyn.simulation import simulate_batch, time_step
 from trackdyn.track.track import RAILS, LinearisedTrack
 from trackdyn.vehicle.models import build_model
 
-AXLES_PER_RAIL = 4
-"""Wheels of one vehicle on each rail: two bogies of two axles, as the vehicle parameter
-sets describe (`trackdyn.vehicle.parameters`)."""
-
 
 def wheels(model) -> list[tuple[int, float, str]]:
     """(contact index, axle position ahead of the centre [m], rail) of every wheel."""
@@ -42,8 +38,8 @@ def cycles_per_passage(model) -> np.ndarray:
     """Load cycles each wheel of the model stands for in one passage of the vehicle [-].
 
     One cycle per wheel; when the model has fewer axles on a rail than the vehicle (the
-    4-DOF model carries only the front bogie), its wheels stand for the vehicle's
-    `AXLES_PER_RAIL` in proportion.
+    4-DOF model carries only the front bogie), its wheels stand for the vehicle's axles per
+    rail (``model.axles_per_rail``) in proportion.
 
     Parameters
     ----------
@@ -57,7 +53,7 @@ def cycles_per_passage(model) -> np.ndarray:
             f"model {model.name} has no contact on the {missing[0]} rail; deterioration needs "
             "both rails (4dof, 7dof or 11dof)"
         )
-    return np.array([AXLES_PER_RAIL / per_rail[r] for _, _, r in wheels(model)])
+    return np.array([model.axles_per_rail / per_rail[r] for _, _, r in wheels(model)])
 
 
 def passage_loads(ds, ballast, state, model) -> np.ndarray:

@@ -54,20 +54,21 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+from pydantic import ConfigDict
 from scipy.optimize import brentq
 
 from trackdyn.deterioration.accumulation import Zoned
 from trackdyn.deterioration.ballast import Ballast, rate_field
 from trackdyn.deterioration.loads import TrafficRun, rail_seat_loads, vehicle_runs
 from trackdyn.deterioration.results import d1_sd, make_dataset
-from trackdyn.deterioration.surveys import surveyed_geometry
-from trackdyn.deterioration.tamping import STARTS, tamped_geometry
+from trackdyn.deterioration.starts import STARTS, surveyed_geometry, tamped_geometry
 from trackdyn.deterioration.zones import check_zones
 from trackdyn.errors import TrackdynInputError, require_positive, shown
-from trackdyn.options import RunOptions
+from trackdyn.options import RunOptions, Strict
 from trackdyn.progress import progress_bar
 from trackdyn.track.rails import rail_section
 from trackdyn.track.track import RAILS, Track
+from trackdyn.vehicle.models import build_model
 from trackdyn.vehicle.parameters import Vehicle
 
 
@@ -92,16 +93,14 @@ class Traffic:
     passages_per_mgt: float
     label: str = ""
 
-    @property
-    def gross_mass(self) -> float:
-        """Gross mass of the vehicle, ``m1 + 2 m2 + 2 mw`` [kg]."""
-        v = self.vehicle
-        return v.m1 + 2 * v.m2 + 2 * v.mw
+    def gross_mass(self, model: str) -> float:
+        """Gross mass of the vehicle as the vehicle model ``model`` carries it [kg]."""
+        return build_model(model, self.vehicle).gross_mass
 
 
-@dataclass(frozen=True)
-class LoopOptions:
-    """Options of the deterioration loop.
+class LoopOptions(Strict):
+    """Options of the deterioration loop; each default lives here (the ``[loop]`` table of
+    a scenario file takes its defaults from these).
 
     Parameters
     ----------
@@ -139,9 +138,9 @@ class LoopOptions:
         Travel between stored simulation samples [m] (sets ``store_every``).
     start : str
         ``"as measured"``: the track as its files give it; ``"tamped"``: freshly tamped
-        (`trackdyn.deterioration.tamping`: most of the D1 band removed, sleepers seated);
+        (`trackdyn.deterioration.starts`: most of the D1 band removed, sleepers seated);
         ``"as surveyed"``: as measured without the wavelengths under 3 m, mostly
-        measurement noise (`trackdyn.deterioration.surveys.surveyed_geometry`).
+        measurement noise (`trackdyn.deterioration.starts.surveyed_geometry`).
     snapshot_mgt : tuple of float
         Further tonnages at which to store a geometry snapshot, e.g. those of surveys
         [MGT]; those beyond ``total_mgt`` are ignored.
@@ -149,6 +148,8 @@ class LoopOptions:
         Shortest first step, in passages of the traffic mix [-]: one train; default 100
         (illustrative: a coal train of 100 wagons; the Richards Bay line runs 200).
     """
+
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
 
     total_mgt: float = 50.0
     max_step_settlement: float = 0.5e-3

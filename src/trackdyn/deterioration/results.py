@@ -215,7 +215,7 @@ def make_dataset(track, history, steps, snap_at, record, timing, traffic, law,
                 for t in traffic
             ),
             "gross_tonnes_per_mgt_of_traffic": sum(
-                t.gross_mass / 1e3 * t.passages_per_mgt for t in traffic
+                t.gross_mass(options.run.model) / 1e3 * t.passages_per_mgt for t in traffic
             ),
             "steps": n_steps,
             "time_vehicle_runs_s": timing["vehicle"],
@@ -234,7 +234,7 @@ def make_dataset(track, history, steps, snap_at, record, timing, traffic, law,
 
 def _flat_options(options) -> dict:
     """Loop options with the run options spelled out as ``run_<name>``."""
-    flat = {f.name: getattr(options, f.name) for f in dataclasses.fields(options)}
+    flat = {name: getattr(options, name) for name in type(options).model_fields}
     run = flat.pop("run")
     flat.update({f"run_{k}": v for k, v in run.model_dump().items()})
     return {k: str(v) if isinstance(v, bool) else v for k, v in flat.items()}

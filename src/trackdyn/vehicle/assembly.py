@@ -213,8 +213,21 @@ class Assembly:
             c += con.damping * np.outer(d, d)
         return c
 
-    def build(self, name: str, static_wheel_load: float) -> Model:
-        """Freeze the assembly into the plain arrays the solver integrates."""
+    def build(self, name: str, static_wheel_load: float, axles_per_rail: int,
+              gross_mass: float) -> Model:  # fmt: skip
+        """Freeze the assembly into the plain arrays the solver integrates.
+
+        Parameters
+        ----------
+        name : str
+            Model name.
+        static_wheel_load : float
+            Static load per wheel [N].
+        axles_per_rail : int
+            Wheels of the whole vehicle on each rail.
+        gross_mass : float
+            Gross mass of the whole vehicle [kg].
+        """
         w = self.wedges
         sec = [s for s in self.springs if s.suspension]
         return Model(
@@ -237,6 +250,8 @@ class Assembly:
             contact_damping=np.array([c.damping for c in self.contacts]),
             contact_sides=tuple(c.side for c in self.contacts),
             static_wheel_load=static_wheel_load,
+            axles_per_rail=axles_per_rail,
+            gross_mass=gross_mass,
         )
 
 
@@ -273,6 +288,11 @@ class Model:
         Bogie side of each single-wheel contact (``""`` if not grouped).
     static_wheel_load : float
         Static load per wheel [N].
+    axles_per_rail : int
+        Wheels of the whole vehicle on each rail (a bogie wagon: 4, a two-axle wagon: 2);
+        a model with fewer wheels on a rail stands for them in proportion.
+    gross_mass : float
+        Gross mass of the whole vehicle [kg].
     """
 
     name: str
@@ -292,6 +312,8 @@ class Model:
     contact_damping: np.ndarray
     contact_sides: tuple[str, ...]
     static_wheel_load: float
+    axles_per_rail: int
+    gross_mass: float
 
     @property
     def reach(self) -> tuple[float, float]:

@@ -26,6 +26,15 @@ from trackdyn.vehicle.parameters import Vehicle
 
 SIDES = (("L", 1.0, "left"), ("R", -1.0, "right"))
 
+AXLES_PER_RAIL = 4
+"""Wheels on each rail of the vehicles the parameter sets describe: two bogies of two
+axles (`trackdyn.vehicle.parameters`)."""
+
+
+def _build(asm: Assembly, name: str, v: Vehicle) -> Model:
+    """The model of a bogie vehicle ``v``: `AXLES_PER_RAIL` axles, ``m1 + 2 m2 + 2 mw``."""
+    return asm.build(name, v.static_wheel_load, AXLES_PER_RAIL, v.m1 + 2 * v.m2 + 2 * v.mw)
+
 
 def _wedge(v: Vehicle, name: str, p: Point, q: Point, scale: float = 1.0) -> Wedge:
     return Wedge(name, p, q, v.k_ss * scale, v.x_ss, v.mu, v.alpha_w, v.C_slope * scale)
@@ -47,7 +56,7 @@ def two_dof(v: Vehicle, wedge: bool = False) -> Model:
     else:
         asm.add(Damper(body.at(), wheel.at(), v.rho1))
     asm.add(Contact("wheel", wheel.at(), "left", (v.b_cc + v.a,), v.rho2))
-    return asm.build("2dof-wedge" if wedge else "2dof", v.static_wheel_load)
+    return _build(asm, "2dof-wedge" if wedge else "2dof", v)
 
 
 def _bogie_side_contacts(asm, v, wheelset, prefix, centre):
@@ -67,7 +76,7 @@ def four_dof(v: Vehicle) -> Model:
         asm.add(Spring(body.at(sign * v.b), ws.at(sign * v.b), v.k1, side))
         asm.add(_wedge(v, side, body.at(sign * v.b), ws.at(sign * v.b)))
     _bogie_side_contacts(asm, v, ws, "", v.b_cc)
-    return asm.build("4dof", v.static_wheel_load)
+    return _build(asm, "4dof", v)
 
 
 def seven_dof(v: Vehicle) -> Model:
@@ -86,7 +95,7 @@ def seven_dof(v: Vehicle) -> Model:
             asm.add(Spring(p, ws.at(sign * v.b), v.k1, name))
             asm.add(_wedge(v, name, p, ws.at(sign * v.b)))
         _bogie_side_contacts(asm, v, ws, end[0].upper(), x)
-    return asm.build("7dof", v.static_wheel_load)
+    return _build(asm, "7dof", v)
 
 
 def eleven_dof(v: Vehicle) -> Model:
@@ -104,7 +113,7 @@ def eleven_dof(v: Vehicle) -> Model:
             asm.add(Spring(frame.at(sign * v.b), ws.at(sign * v.b), v.kp))
             asm.add(Damper(frame.at(sign * v.b), ws.at(sign * v.b), v.rho_p))
         _bogie_side_contacts(asm, v, ws, end[0].upper(), x)
-    return asm.build("11dof", v.static_wheel_load)
+    return _build(asm, "11dof", v)
 
 
 def full(v: Vehicle) -> Model:
@@ -162,7 +171,7 @@ def full(v: Vehicle) -> Model:
             p, name = body.at(sign * v.b, x), end[0].upper() + side
             asm.add(Spring(p, frames[side].at(sign * v.b), v.k1, name))
             asm.add(_wedge(v, name, p, frames[side].at(sign * v.b)))
-    return asm.build("full", v.static_wheel_load)
+    return _build(asm, "full", v)
 
 
 def two_dof_wedge(v: Vehicle) -> Model:

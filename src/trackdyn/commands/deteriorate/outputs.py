@@ -5,9 +5,40 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from trackdyn.deterioration import plots
-from trackdyn.deterioration.sections import summary
+from trackdyn.commands.deteriorate.plots import (
+    geometry_evolution,
+    quality_evolution,
+    settlement_map,
+)
 from trackdyn.io import write_netcdf
+
+
+def summary(datasets) -> pd.DataFrame:
+    """One row per section: steps, final settlement and D1 SD, first maintenance trigger.
+
+    Parameters
+    ----------
+    datasets : list of xarray.Dataset
+        Results of `trackdyn.deterioration.predict` with a ``section`` attribute.
+    """
+    rows = []
+    for ds in datasets:
+        final = ds.settlement.isel(mgt=-1) * 1e3
+        trigger = ds.trigger_mgt_any_rail.values
+        rows.append(
+            {
+                "section": ds.attrs["section"],
+                "mgt": float(ds.mgt[-1]),
+                "steps": int(ds.attrs["steps"]),
+                "settlement_min_mm": float(final.min()),
+                "settlement_mean_mm": float(final.mean()),
+                "settlement_max_mm": float(final.max()),
+                "d1_sd_max_initial_mm": float(ds.d1_sd.isel(mgt=0).max()),
+                "d1_sd_max_final_mm": float(ds.d1_sd.isel(mgt=-1).max()),
+                "first_trigger_mgt": float(np.min(trigger)) if trigger.size else np.inf,
+            }
+        )
+    return pd.DataFrame(rows)
 
 
 def settlement_table(ds) -> pd.DataFrame:
@@ -116,9 +147,9 @@ def write_outputs(datasets, folder) -> list[str]:
         csv(settlement_table(ds), f"settlement_{name}.csv")
         title = f"{name}: {ds.attrs['traffic']}"
         for kind, draw in (
-            ("geometry", plots.geometry_evolution),
-            ("quality", plots.quality_evolution),
-            ("settlement_map", plots.settlement_map),
+            ("geometry", geometry_evolution),
+            ("quality", quality_evolution),
+            ("settlement_map", settlement_map),
         ):
             draw(ds, folder / f"{name}_{kind}.png", title)
             names.append(f"{name}_{kind}.png")

@@ -1,4 +1,9 @@
-"""A freshly tamped start: most of the D1 band taken out, the longer waves kept.
+"""Start states of a deterioration run: tamped, as measured, as surveyed.
+
+``"as measured"`` is the track as its files give it. ``"tamped"``: a freshly tamped
+start, most of the D1 band taken out, the longer waves kept (`tamped_geometry`).
+``"as surveyed"``: the measured track without the wavelengths under 3 m, mostly
+measurement noise (`surveyed_geometry`).
 
 Tamping lifts and levels the track over the short and middle wavelengths; the long waves
 of the formation (EN 13848-1 bands D2, 25-70 m, and D3, 70-150 m) are mostly left. The
@@ -20,10 +25,11 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+from scipy import signal
 from scipy.optimize import brentq
 
 from trackdyn.deterioration.results import d1_sd
-from trackdyn.track.quality import longitudinal_level
+from trackdyn.track.quality import WAVEBANDS, longitudinal_level, to_uniform_grid
 from trackdyn.track.track import RAILS, Geometry
 
 TAMPED_D1_SD = 1.2e-3
@@ -32,6 +38,9 @@ illustrative: the middle of the 1-1.5 mm the example is meant to start from."""
 
 STARTS = ("tamped", "as measured", "as surveyed")
 """Start states of a deterioration run."""
+
+SHORTEST = WAVEBANDS["D1"][0]
+"""Shortest wavelength a survey is taken to resolve [m]."""
 
 
 def tamped_geometry(geometry: Geometry, extent, segment_length: float,
@@ -74,3 +83,32 @@ def tamped_geometry(geometry: Geometry, extent, segment_length: float,
             a = brentq(excess, 0.0, 1.0, xtol=1e-6)
         profiles[rail] = z - a * d1
     return dataclasses.replace(geometry, **profiles)
+
+
+def surveyed_geometry(geometry: Geometry, shortest: float = SHORTEST) -> Geometry:
+    """The geometry with wavelengths under ``shortest`` removed.
+
+    Zero-phase 4th-order Butterworth low-pass (``scipy.signal.sosfiltfilt``), ends padded
+    by holding the end value over one ``shortest``; non-uniform input is resampled at the
+    median spacing and back. Coarser sampling than ``shortest / 2`` is returned as it is.
+
+    Parameters
+    ----------
+    geometry : Geometry
+        The surveyed geometry.
+    shortest : float
+        Shortest wavelength kept [m].
+    """
+    x = geometry.distance
+    xu, _, dx, uniform = to_uniform_grid(x, x)
+    if dx >= shortest / 2:
+        return geometry
+    sos = signal.butter(4, 1.0 / shortest, btype="lowpass", fs=1.0 / dx, output="sos")
+    pad = min(xu.size - 1, int(np.ceil(shortest / dx)))
+    smooth = {}
+    for rail in RAILS:
+        z = geometry.profile(rail)
+        f = signal.sosfiltfilt(sos, z if uniform else np.interp(xu, x, z), padtype="constant",
+                               padlen=pad)  # fmt: skip
+        smooth[rail] = f if uniform else np.interp(x, xu, f)
+    return dataclasses.replace(geometry, **smooth)

@@ -60,10 +60,16 @@ from pydantic import (
     model_validator,
 )
 
+from trackdyn.deterioration.loop import LoopOptions
 from trackdyn.errors import TrackdynInputError
-from trackdyn.io import read_toml
 from trackdyn.limits import MAX_SPEED_KMH
-from trackdyn.options import RunOptions, Strict, parse, vehicle_source
+from trackdyn.options import RunOptions, Strict, load_toml, vehicle_source
+
+
+def _default(name: str, scale: float = 1.0):
+    """The default of a `LoopOptions` field, times ``scale`` for the file's unit."""
+    value = LoopOptions.model_fields[name].default
+    return value if scale == 1.0 else value * scale
 
 
 class TrafficSpec(Strict):
@@ -92,14 +98,14 @@ DEFAULT_TRAFFIC = [
 
 class SettlementSpec(Strict):
     """``[settlement]``: ``law`` name, parameter ``file``, ``overrides`` [SI], the lognormal
-    settlement-rate field's ``rate_cov`` [-], ``rate_correlation_length_m`` [m] and
-    ``seed``."""
+    settlement-rate field's ``rate_cov`` [-], ``rate_correlation_length_m`` [m] (defaults
+    those of `LoopOptions`) and ``seed``."""
 
     law: str = "power"
     file: Path | None = None
     overrides: dict[str, float] = Field(default_factory=dict)
-    rate_cov: NonNegativeFloat = 0.3
-    rate_correlation_length_m: PositiveFloat = 3.0
+    rate_cov: NonNegativeFloat = _default("rate_cov")
+    rate_correlation_length_m: PositiveFloat = _default("rate_correlation_length")
     seed: int = Field(0, ge=0)
 
     @field_validator("law")
@@ -116,15 +122,15 @@ class LoopSpec(Strict):
     """``[loop]``: ``total_mgt`` [MGT], ``max_step_settlement_mm`` [mm],
     ``snapshot_every_mgt`` [MGT], ``threshold_sd_mm`` [mm] (D1 SD of maintenance),
     ``segment_length_m`` [m], ``max_steps``, ``min_step_passages`` [-] (the first step:
-    one train)."""
+    one train); the defaults are those of `LoopOptions`."""
 
-    total_mgt: PositiveFloat = 50.0
-    max_step_settlement_mm: PositiveFloat = 0.5
-    snapshot_every_mgt: PositiveFloat = 10.0
-    threshold_sd_mm: PositiveFloat = 1.6
-    segment_length_m: PositiveFloat = 200.0
-    max_steps: PositiveInt = 1000
-    min_step_passages: PositiveFloat = 100.0
+    total_mgt: PositiveFloat = _default("total_mgt")
+    max_step_settlement_mm: PositiveFloat = _default("max_step_settlement", 1e3)
+    snapshot_every_mgt: PositiveFloat = _default("snapshot_every_mgt")
+    threshold_sd_mm: PositiveFloat = _default("threshold_sd_mm")
+    segment_length_m: PositiveFloat = _default("segment_length")
+    max_steps: PositiveInt = _default("max_steps")
+    min_step_passages: PositiveFloat = _default("min_step_passages")
 
 
 class TrackSectionsSpec(Strict):
@@ -182,11 +188,7 @@ def load_deterioration(path=None) -> tuple[DeteriorationScenario, Path]:
     path : path, optional
         Scenario TOML file.
     """
-    if path is None:
-        return DeteriorationScenario(), Path.cwd()
-    path = Path(path)
-    spec = parse(DeteriorationScenario, read_toml(path), str(path))
-    return spec, path.resolve().parent
+    return load_toml(DeteriorationScenario, path)
 
 
 def loop_options(spec: DeteriorationScenario, seed, example: bool = False):
@@ -201,8 +203,6 @@ def loop_options(spec: DeteriorationScenario, seed, example: bool = False):
     example : bool
         The section is the built-in example (starts tamped unless ``[track] start`` says).
     """
-    from trackdyn.deterioration.loop import LoopOptions
-
     lp = spec.loop
     return LoopOptions(
         total_mgt=lp.total_mgt,

@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from trackdyn.deterioration.scenario import load_deterioration
-from trackdyn.deterioration.sections import read_sections, run_sections, section_tasks
+from trackdyn.commands.deteriorate.scenario import load_deterioration
+from trackdyn.commands.deteriorate.sections import read_sections, section_tasks
+from trackdyn.deterioration.runs import run_sections
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import write_geometry, write_supports
 from trackdyn.track.synthetic import SoftSpot, synthetic_track

@@ -1,7 +1,7 @@
 """Fit settlement-law parameters to repeated geometry surveys (`trackdyn calibrate`).
 
-The calibration file is read by `trackdyn.deterioration.calibration_spec`. Each later
-survey is aligned to the first (`trackdyn.deterioration.surveys`). The model runs from the
+The calibration file is read by `trackdyn.commands.calibrate.spec`. Each later
+survey is aligned to the first (`trackdyn.calibration.surveys`). The model runs from the
 first survey (``[track] start``, default as surveyed: wavelengths under 3 m removed) over
 the tonnage to each later one (its cycle count starts there: only tonnage differences
 enter); each survey is aligned again to the profile predicted for it; the residuals are
@@ -12,7 +12,7 @@ loss), in log space for parameters whose bounds are positive and as they are oth
 within the ``min`` and ``max`` of the parameter file
 (`trackdyn.deterioration.law_files.law_bounds`). The Jacobian comes from forward
 differences of `FD_STEP`; a point and its neighbours run as one batch through
-`trackdyn.deterioration.sections.run_sections` (one Dask task per parameter set). Standard
+`trackdyn.deterioration.runs.run_sections` (one Dask task per parameter set). Standard
 errors: ``σ² (JᵀJ)⁻¹`` at the solution, σ the robust (MAD) scale of the residuals, mapped
 to the parameters by the delta method.
 
@@ -34,11 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from trackdyn.deterioration.calibration_spec import CalibrationScenario
-from trackdyn.deterioration.law_files import law_bounds, law_units
-from trackdyn.deterioration.scenario import loop_options, resolve_inputs
-from trackdyn.deterioration.sections import Section, SectionTask, run_section, run_sections
-from trackdyn.deterioration.surveys import (
+from trackdyn.calibration.surveys import (
     REFINE,
     align,
     common_grid,
@@ -46,6 +42,8 @@ from trackdyn.deterioration.surveys import (
     profiles_at,
     read_survey,
 )
+from trackdyn.deterioration.law_files import law_bounds, law_units
+from trackdyn.deterioration.runs import Section, SectionTask, run_section, run_sections
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import read_supports
 from trackdyn.track.quality import WAVEBANDS
@@ -68,7 +66,7 @@ class Problem:
     Parameters
     ----------
     spec : CalibrationScenario
-        The calibration as read.
+        The calibration as read (`trackdyn.commands.calibrate.spec`).
     base : Path
         Folder of the calibration file.
     section : Section
@@ -105,7 +103,7 @@ class Problem:
         Loop options to the last survey; ``fit_options`` to the last fitted one.
     """
 
-    spec: CalibrationScenario
+    spec: object
     base: Path
     section: Section
     traffic: tuple
@@ -137,7 +135,7 @@ class Problem:
         return np.where(self.log, np.log(np.abs(values)), values)
 
 
-def _fit_coordinates(spec: CalibrationScenario, base: Path, law):
+def _fit_coordinates(spec, base: Path, law):
     """Fitted names, log flags and bounds in fit coordinates; refuses unknown names,
     missing bounds and starting values outside them."""
     s = spec.settlement
@@ -167,7 +165,7 @@ def _fit_coordinates(spec: CalibrationScenario, base: Path, law):
     return tuple(spec.fit.parameters), np.array(log), np.array(lower), np.array(upper)
 
 
-def prepare(spec: CalibrationScenario, base: Path) -> Problem:
+def prepare(spec, base: Path, traffic, law, options) -> Problem:
     """Check the calibration, read and align the surveys, take the measured changes.
 
     Everything is refused here, before any model run.
@@ -175,11 +173,16 @@ def prepare(spec: CalibrationScenario, base: Path) -> Problem:
     Parameters
     ----------
     spec : CalibrationScenario
-        The calibration.
+        The calibration (`trackdyn.commands.calibrate.spec`).
     base : Path
         Folder that relative paths in it start from.
+    traffic : sequence of Traffic
+        Traffic of the period.
+    law : SettlementLaw
+        The law with its starting values.
+    options : LoopOptions
+        Loop options of the file; the tonnages and snapshots are set from the surveys.
     """
-    traffic, law = resolve_inputs(spec, base)
     names, log, lower, upper = _fit_coordinates(spec, base, law)
     files = [base / s.geometry for s in spec.survey]
     geometries = [read_survey(f) for f in files]
@@ -214,13 +217,12 @@ def prepare(spec: CalibrationScenario, base: Path) -> Problem:
         raise TrackdynInputError("fit.ignore_m: leaves no distance to compare the surveys on")
     mgt = np.array([s.mgt - spec.survey[0].mgt for s in spec.survey])
     fitted = np.array([i > 0 and not s.check for i, s in enumerate(spec.survey)])
-    options = dataclasses.replace(
-        loop_options(spec, (spec.settlement.seed, 0)),
-        total_mgt=float(mgt[-1]),
-        snapshot_every_mgt=float(mgt[-1]),
-        snapshot_mgt=tuple(float(m) for m in mgt[1:]),
-    )
-    fit_options = dataclasses.replace(options, total_mgt=float(mgt[fitted].max()))
+    options = options.model_copy(update={
+        "total_mgt": float(mgt[-1]),
+        "snapshot_every_mgt": float(mgt[-1]),
+        "snapshot_mgt": tuple(float(m) for m in mgt[1:]),
+    })  # fmt: skip
+    fit_options = options.model_copy(update={"total_mgt": float(mgt[fitted].max())})
     section = Section("calibration", str(files[0].resolve()), str(supports_file.resolve()))
     first = profiles_at(geometries[0], 0.0, x)
     return Problem(spec, base, section, tuple(traffic), law, names, log, lower, upper, mgt,
@@ -351,8 +353,9 @@ def synthetic_surveys(track, traffic, law, options, mgt, *, noise=0.3e-3, offset
     """
     from trackdyn.deterioration.loop import predict
 
-    o = dataclasses.replace(options, total_mgt=float(mgt[-1]), snapshot_every_mgt=float(mgt[-1]),
-                            snapshot_mgt=tuple(float(m) for m in mgt[1:]))  # fmt: skip
+    o = options.model_copy(update={"total_mgt": float(mgt[-1]),
+                                   "snapshot_every_mgt": float(mgt[-1]),
+                                   "snapshot_mgt": tuple(float(m) for m in mgt[1:])})  # fmt: skip
     ds = predict(track, traffic, law, o)
     rng = np.random.default_rng(seed)
     x = track.geometry.distance

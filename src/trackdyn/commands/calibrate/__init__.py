@@ -25,16 +25,15 @@ def calibrate(calibration, out, overwrite: bool, workers, scheduler, console) ->
     console : rich.console.Console
         Where the alignments, the fit's progress and its result are shown.
     """
-    from trackdyn.deterioration.calibrate import prepare
-    from trackdyn.deterioration.calibration_outputs import sd_errors, write_calibration
-    from trackdyn.deterioration.calibration_spec import load_calibration
-    from trackdyn.deterioration.fitting import fit
+    from trackdyn.calibration.fit import fit
+    from trackdyn.commands.calibrate.outputs import sd_errors, write_calibration
+    from trackdyn.commands.calibrate.spec import calibration_problem, load_calibration
     from trackdyn.deterioration.law_files import law_units
     from trackdyn.parallel import shared_cluster
 
     require_workers(workers)
     spec, base = load_calibration(calibration)
-    problem = prepare(spec, base)
+    problem = calibration_problem(spec, base)
     console.print(alignment_table(spec, problem))
     with output_folder(out, "calibrate", overwrite) as stage, shared_cluster(workers, scheduler):
         result = fit(problem, workers=workers, scheduler=scheduler, log=console.print)

@@ -22,19 +22,14 @@ filter on the same grid, so the ends of the band-pass affect both alike.
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import signal
 
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import read_geometry
-from trackdyn.track.quality import WAVEBANDS, longitudinal_level, to_uniform_grid
+from trackdyn.track.quality import longitudinal_level
 from trackdyn.track.track import RAILS, Geometry
-
-SHORTEST = WAVEBANDS["D1"][0]
-"""Shortest wavelength a survey is taken to resolve [m]."""
 
 GAP_FACTOR = 2.0
 """A distance step over this many times the survey's median spacing is a gap [-]."""
@@ -65,35 +60,6 @@ def read_survey(path) -> Geometry:
             f"(spacing {spacing:g} m elsewhere); a survey must be continuous"
         )
     return geometry
-
-
-def surveyed_geometry(geometry: Geometry, shortest: float = SHORTEST) -> Geometry:
-    """The geometry with wavelengths under ``shortest`` removed.
-
-    Zero-phase 4th-order Butterworth low-pass (``scipy.signal.sosfiltfilt``), ends padded
-    by holding the end value over one ``shortest``; non-uniform input is resampled at the
-    median spacing and back. Coarser sampling than ``shortest / 2`` is returned as it is.
-
-    Parameters
-    ----------
-    geometry : Geometry
-        The surveyed geometry.
-    shortest : float
-        Shortest wavelength kept [m].
-    """
-    x = geometry.distance
-    xu, _, dx, uniform = to_uniform_grid(x, x)
-    if dx >= shortest / 2:
-        return geometry
-    sos = signal.butter(4, 1.0 / shortest, btype="lowpass", fs=1.0 / dx, output="sos")
-    pad = min(xu.size - 1, int(np.ceil(shortest / dx)))
-    smooth = {}
-    for rail in RAILS:
-        z = geometry.profile(rail)
-        f = signal.sosfiltfilt(sos, z if uniform else np.interp(xu, x, z), padtype="constant",
-                               padlen=pad)  # fmt: skip
-        smooth[rail] = f if uniform else np.interp(x, xu, f)
-    return dataclasses.replace(geometry, **smooth)
 
 
 def d1_levels(geometry: Geometry, spacing: float) -> tuple[float, np.ndarray]:

@@ -12,12 +12,13 @@ import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
+from trackdyn.calibration.fit import Objective
+from trackdyn.calibration.problem import synthetic_surveys
+from trackdyn.calibration.surveys import align
 from trackdyn.cli import app
+from trackdyn.commands.calibrate.spec import calibration_problem, load_calibration
 from trackdyn.deterioration import LoopOptions, Traffic, load_law
-from trackdyn.deterioration.calibrate import prepare, synthetic_surveys
-from trackdyn.deterioration.calibration_spec import load_calibration
-from trackdyn.deterioration.fitting import Objective
-from trackdyn.deterioration.surveys import align, surveyed_geometry
+from trackdyn.deterioration.starts import surveyed_geometry
 from trackdyn.io import write_geometry, write_supports
 from trackdyn.options import RunOptions
 from trackdyn.track.synthetic import SoftSpot, synthetic_track
@@ -184,7 +185,7 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(folder, tmp_path, ca
 def test_jacobian_on_two_local_workers_equals_serial(folder):
     """One batch (the point and its two neighbours) on a real LocalCluster."""
     spec, base = load_calibration(folder / "calibration.toml")
-    problem = prepare(spec, base)
+    problem = calibration_problem(spec, base)
     x0 = problem.start()
     serial = Objective(problem, workers=1).jac(x0)
     parallel = Objective(problem, workers=2).jac(x0)

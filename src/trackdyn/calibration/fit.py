@@ -1,4 +1,4 @@
-"""The least-squares fit of a calibration (`trackdyn.deterioration.calibrate`).
+"""The least-squares fit of a calibration (`trackdyn.calibration.problem`).
 
 Every evaluation of the misfit at a point also runs its forward-difference neighbours in
 the same batch of Dask tasks, so a Jacobian's ``n + 1`` model runs go to ``n + 1``
@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from trackdyn.deterioration.calibrate import (
+from trackdyn.calibration.problem import (
     FD_STEP,
     Comparison,
     Problem,
@@ -162,7 +162,7 @@ def fit(problem: Problem, *, workers=None, scheduler=None, log=None) -> FitResul
     Parameters
     ----------
     problem : Problem
-        The calibration (`trackdyn.deterioration.calibrate.prepare`).
+        The calibration (`trackdyn.calibration.problem.prepare`).
     workers : int, optional
         Worker processes (default one per core; 1 runs in this process).
     scheduler : str, optional

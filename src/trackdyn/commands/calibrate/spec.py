@@ -1,6 +1,6 @@
 """Calibration files (TOML) for `trackdyn calibrate`.
 
-A calibration file is a deterioration scenario (`trackdyn.deterioration.scenario`:
+A calibration file is a deterioration scenario (`trackdyn.commands.deteriorate.scenario`:
 ``[run]``, ``[[traffic]]``, ``[settlement]``, ``[loop]``) whose geometry comes from the
 surveys, plus ``[[survey]]`` entries and a ``[fit]`` table:
 
@@ -41,7 +41,12 @@ from typing import Literal
 
 from pydantic import Field, NonNegativeFloat, PositiveFloat, PositiveInt, model_validator
 
-from trackdyn.deterioration.scenario import DeteriorationScenario
+from trackdyn.calibration.problem import Problem, prepare
+from trackdyn.commands.deteriorate.scenario import (
+    DeteriorationScenario,
+    loop_options,
+    resolve_inputs,
+)
 from trackdyn.options import Strict, load_toml
 
 
@@ -117,3 +122,18 @@ def load_calibration(path) -> tuple[CalibrationScenario, Path]:
         Calibration TOML file.
     """
     return load_toml(CalibrationScenario, path)
+
+
+def calibration_problem(spec: CalibrationScenario, base: Path) -> Problem:
+    """The `Problem` of a calibration file: its traffic, law and loop options resolved,
+    the surveys read and aligned (`trackdyn.calibration.problem.prepare`).
+
+    Parameters
+    ----------
+    spec : CalibrationScenario
+        The calibration.
+    base : Path
+        Folder that relative paths in it start from.
+    """
+    traffic, law = resolve_inputs(spec, base)
+    return prepare(spec, base, traffic, law, loop_options(spec, (spec.settlement.seed, 0)))

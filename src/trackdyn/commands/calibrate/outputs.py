@@ -2,17 +2,16 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from trackdyn.deterioration import plots
-from trackdyn.deterioration.calibrate import Problem
-from trackdyn.deterioration.fitting import FitResult
-from trackdyn.deterioration.law_files import BOUNDS, law_file_table, law_units
-from trackdyn.deterioration.surveys import d1_change
+from trackdyn.calibration.fit import FitResult
+from trackdyn.calibration.problem import Problem
+from trackdyn.calibration.surveys import d1_change
+from trackdyn.commands.calibrate.plots import calibration_figure
+from trackdyn.deterioration.law_files import law_file_table, law_table_toml, law_units
 from trackdyn.track.quality import segment_sd
 from trackdyn.track.track import RAILS
 from trackdyn.units import UNITS
@@ -93,15 +92,6 @@ def sd_errors(table: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def _toml_entry(entry: dict) -> str:
-    keys = ["value", "unit", *[b for b in BOUNDS if b in entry], "source"]
-    parts = []
-    for key in keys:
-        v = entry[key]
-        parts.append(f"{key} = {json.dumps(v) if isinstance(v, str) else format(v, '.6g')}")
-    return "{ " + ", ".join(parts) + " }"
-
-
 def parameter_file(problem: Problem, result: FitResult, where: str) -> str:
     """A settlement parameter file (TOML) with the fitted values, for `trackdyn
     deteriorate`'s ``[settlement] file``.
@@ -128,14 +118,11 @@ def parameter_file(problem: Problem, result: FitResult, where: str) -> str:
     )
     fitted = dict(zip(problem.names, zip(result.values, result.standard_errors, strict=True),
                       strict=True))  # fmt: skip
-    lines = [
-        f"# Settlement law parameters fitted by `trackdyn calibrate {Path(where).name}`.",
-        f"# Surveys: {surveys}; supports {Path(problem.spec.track.supports).name}.",
-        "",
-        f"[{s.law}]",
-    ]
-    if "description" in table:
-        lines.append(f"description = {json.dumps(table['description'])}")
+    header = (
+        f"# Settlement law parameters fitted by `trackdyn calibrate {Path(where).name}`.\n"
+        f"# Surveys: {surveys}; supports {Path(problem.spec.track.supports).name}.\n\n"
+    )
+    entries = {}
     for name, si_unit in law_units(s.law).items():
         entry = dict(table.get(name, {}))
         if name in fitted:
@@ -149,8 +136,8 @@ def parameter_file(problem: Problem, result: FitResult, where: str) -> str:
         elif name in s.overrides:
             entry = {"value": s.overrides[name], "unit": si_unit,
                      "source": f"[settlement] overrides of {Path(where).name}"}  # fmt: skip
-        lines.append(f"{name} = {_toml_entry(entry)}")
-    return "\n".join(lines) + "\n"
+        entries[name] = entry
+    return header + law_table_toml(s.law, entries, table.get("description"))
 
 
 def write_calibration(problem: Problem, result: FitResult, folder, where: str) -> pd.DataFrame:
@@ -171,5 +158,5 @@ def write_calibration(problem: Problem, result: FitResult, folder, where: str) -
     (folder / FILES[0]).write_text(parameter_file(problem, result, where))
     table = segment_table(problem, result)
     table.to_csv(folder / FILES[1], index=False, float_format="%.4g")
-    plots.calibration(problem, result, folder / FILES[2])
+    calibration_figure(problem, result, folder / FILES[2])
     return table

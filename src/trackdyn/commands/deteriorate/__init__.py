@@ -1,4 +1,10 @@
-"""`trackdyn deteriorate`: the deterioration scenario run section by section on Dask."""
+"""`trackdyn deteriorate`: the deterioration scenario run section by section on Dask.
+
+The scenario file (`trackdyn.commands.deteriorate.scenario`), the sections list
+(`trackdyn.commands.deteriorate.sections`), the output files
+(`trackdyn.commands.deteriorate.outputs`) and figures
+(`trackdyn.commands.deteriorate.plots`); the runs are `trackdyn.deterioration.runs`.
+"""
 
 from __future__ import annotations
 
@@ -27,9 +33,10 @@ def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> 
     console : rich.console.Console
         Where the summary table is shown.
     """
-    from trackdyn.deterioration.outputs import write_outputs
-    from trackdyn.deterioration.scenario import load_deterioration
-    from trackdyn.deterioration.sections import run_sections, section_tasks, summary
+    from trackdyn.commands.deteriorate.outputs import summary, write_outputs
+    from trackdyn.commands.deteriorate.scenario import load_deterioration
+    from trackdyn.commands.deteriorate.sections import section_tasks
+    from trackdyn.deterioration.runs import run_sections
 
     spec, base = load_deterioration(scenario)
     require_workers(workers)

@@ -1,0 +1,139 @@
+"""Sections lists of `trackdyn deteriorate`, and the tasks of a scenario.
+
+A sections list is a CSV file naming each section's geometry and supports files, relative
+to the CSV file::
+
+    name,geometry,supports
+    km12,km12_geometry.csv,km12_supports.csv
+    km13,km13_geometry.csv,km13_supports.csv
+
+Each section's whole loop is one task (`trackdyn.deterioration.runs.SectionTask`). The
+rate-field seed of section ``i`` is ``(seed, i)``, so results do not depend on how the
+sections are spread over workers.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pandas as pd
+
+from trackdyn.commands.deteriorate.scenario import loop_options, resolve_inputs
+from trackdyn.data import EXAMPLE_ZONES, example_path
+from trackdyn.deterioration.law_files import load_law
+from trackdyn.deterioration.runs import Section, SectionTask
+from trackdyn.deterioration.zones import read_zones
+from trackdyn.errors import TrackdynInputError
+
+NAME = re.compile(r"^[A-Za-z0-9_.-]+$")
+"""Section names become parts of file names."""
+
+
+def read_sections(path) -> list[Section]:
+    """Read a sections CSV (``name,geometry,supports[,zones]``, paths relative to the CSV
+    file; an empty ``zones`` cell: all open track).
+
+    Parameters
+    ----------
+    path : path
+        The CSV file.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise TrackdynInputError(f"{path}: no such file")
+    try:
+        frame = pd.read_csv(path, comment="#", skipinitialspace=True, dtype=str)
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
+        raise TrackdynInputError(f"{path}: not a readable CSV file ({exc})") from None
+    missing = [c for c in ("name", "geometry", "supports") if c not in frame.columns]
+    if missing:
+        raise TrackdynInputError(f"{path}: no column {missing[0]!r} (name,geometry,supports)")
+    if frame.empty:
+        raise TrackdynInputError(f"{path}: no sections listed")
+    sections, seen = [], set()
+    for i, row in enumerate(frame.itertuples(index=False)):
+        line = f"{path}: line {i + 2}"
+        name = str(row.name).strip()
+        if not NAME.match(name) or name in seen:
+            raise TrackdynInputError(
+                f"{line}: section name {name!r} is empty, repeated or not made of "
+                "letters, digits, '_', '-' and '.'"
+            )
+        seen.add(name)
+        files = []
+        for key in ("geometry", "supports", "zones"):
+            value = getattr(row, key, None)
+            if key == "zones" and not isinstance(value, str):
+                files.append(None)
+                continue
+            file = path.parent / str(value).strip()
+            if not isinstance(value, str) or not file.is_file():
+                raise TrackdynInputError(f"{line}: {key} file {value!r} not found")
+            files.append(str(file.resolve()))
+        sections.append(Section(name, *files))
+    return sections
+
+
+def sections_of(spec, base: Path) -> list[Section]:
+    """The sections a scenario names: a list, one pair of files, or the example (with its
+    zones, `trackdyn.data.EXAMPLE_ZONES`, unless ``[track] zones`` gives others).
+
+    Parameters
+    ----------
+    spec : DeteriorationScenario
+        The scenario.
+    base : Path
+        Folder that relative paths in the scenario start from.
+    """
+    t = spec.track
+    if t.sections is not None:
+        return read_sections(base / t.sections)
+    zones = None
+    if t.zones is not None:
+        if not (base / t.zones).is_file():
+            raise TrackdynInputError(f"track.zones: {base / t.zones}: no such file")
+        zones = str((base / t.zones).resolve())
+    if t.geometry is None:
+        return [Section("example", zones=zones or str(example_path(EXAMPLE_ZONES)))]
+    files = [base / t.geometry, base / t.supports]
+    for key, file in zip(("geometry", "supports"), files, strict=True):
+        if not file.is_file():
+            raise TrackdynInputError(f"track.{key}: {file}: no such file")
+    name = re.sub(r"[^A-Za-z0-9_.-]", "_", files[0].stem)
+    return [Section(name, str(files[0].resolve()), str(files[1].resolve()), zones)]
+
+
+def section_tasks(spec, base: Path, progress: bool = False) -> list[SectionTask]:
+    """Tasks of a scenario, one per section; input is checked here, before any run.
+
+    Parameters
+    ----------
+    spec : DeteriorationScenario
+        The scenario.
+    base : Path
+        Folder that relative paths in the scenario start from.
+    progress : bool
+        Show a tonnage progress bar in each task (for in-process runs).
+    """
+    traffic, law = resolve_inputs(spec, base)
+    s = spec.settlement
+    own = None if s.file is None else base / s.file
+
+    def load(kind, file):
+        return load_law(s.law, file or own, kind, **s.overrides)
+
+    def options(i, example):
+        return loop_options(spec, (spec.settlement.seed, i), example)
+
+    return [
+        SectionTask(
+            sec,
+            tuple(traffic),
+            law,
+            options(i, sec.geometry is None),
+            progress,
+            tuple(read_zones(sec.zones, load)) if sec.zones else (),
+        )  # fmt: skip
+        for i, sec in enumerate(sections_of(spec, base))
+    ]

@@ -1,0 +1,44 @@
+"""A vehicle model carries its axles per rail and gross mass: the load cycles of a passage
+follow the vehicle, not a fixed bogie wagon."""
+
+import numpy as np
+
+from trackdyn.deterioration import Traffic
+from trackdyn.deterioration.loads import cycles_per_passage
+from trackdyn.options import RunOptions
+from trackdyn.vehicle.assembly import Assembly, Body, Contact, Spring
+from trackdyn.vehicle.models import MODELS, SIDES, build_model
+from trackdyn.vehicle.parameters import load_vehicle
+
+LOADED = load_vehicle("loaded")
+
+
+def two_axle(v):
+    """A two-axle wagon: the body on two wheelsets, one wheel per contact."""
+    asm = Assembly()
+    body = asm.add(Body("body", v.m1, v.I1, v.Ip, ("bounce", "roll", "pitch")))
+    for end, x in (("front", v.b_cc), ("back", -v.b_cc)):
+        ws = asm.add(Body(f"{end}_wheelset", v.mw, roll_inertia=v.Iw, motions=("bounce", "roll")))
+        for side, sign, rail in SIDES:
+            asm.add(Spring(body.at(sign * v.b, x), ws.at(sign * v.b), v.k1))
+            asm.add(Contact(end[0].upper() + side, ws.at(sign * v.l), rail, (x,), v.rho2))
+    return asm.build("two-axle", v.static_wheel_load, 2, v.m1 + 2 * v.mw)
+
+
+def test_a_two_axle_model_counts_one_cycle_per_wheel(monkeypatch):
+    monkeypatch.setitem(MODELS, "two-axle", two_axle)
+    model = build_model(RunOptions(model="two-axle").model, LOADED)
+    # 2 wheels on each rail, 2 axles per rail: one cycle each (a bogie wagon's 4 axles per
+    # rail would count each wheel twice)
+    assert model.axles_per_rail == 2
+    np.testing.assert_array_equal(cycles_per_passage(model), np.ones(4))
+    traffic = Traffic(LOADED, 60 / 3.6, 100.0, "two-axle")
+    assert traffic.gross_mass("two-axle") == LOADED.m1 + 2 * LOADED.mw
+
+
+def test_bogie_models_stand_for_four_axles_per_rail():
+    # 7-DOF: two lumped bogies per rail, two axles each; 4-DOF: the front bogie only
+    np.testing.assert_array_equal(cycles_per_passage(build_model("7dof", LOADED)), np.ones(8))
+    np.testing.assert_array_equal(cycles_per_passage(build_model("4dof", LOADED)), np.full(4, 2.0))
+    gross = LOADED.m1 + 2 * LOADED.m2 + 2 * LOADED.mw
+    assert Traffic(LOADED, 60 / 3.6, 100.0).gross_mass("11dof") == gross
