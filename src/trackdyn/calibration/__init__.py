@@ -1,12 +1,12 @@
 """Calibration: settlement-law parameters fitted to repeated geometry surveys.
 
 `trackdyn.calibration.surveys` reads and aligns the surveys; `prepare` builds the
-`Problem` (aligned surveys, measured changes, fit coordinates); `fit` minimises the misfit
+`Calibration` (aligned surveys, measured changes, fit coordinates); `fit` minimises the misfit
 of the predicted D1-band change (`trackdyn.deterioration.predict`) by least squares;
 `synthetic_surveys` makes surveys from the model itself, for testing on known parameters.
 """
 
 from trackdyn.calibration.fit import FitResult, Objective, fit
-from trackdyn.calibration.problem import Problem, prepare, synthetic_surveys
+from trackdyn.calibration.problem import Calibration, prepare, synthetic_surveys
 
-__all__ = ["FitResult", "Objective", "Problem", "fit", "prepare", "synthetic_surveys"]
+__all__ = ["FitResult", "Objective", "Calibration", "fit", "prepare", "synthetic_surveys"]

@@ -20,8 +20,8 @@ from scipy.optimize import least_squares
 
 from trackdyn.calibration.problem import (
     FD_STEP,
+    Calibration,
     Comparison,
-    Problem,
     compare,
     residuals,
     run_laws,
@@ -41,7 +41,7 @@ class Objective:
 
     Parameters
     ----------
-    problem : Problem
+    problem : Calibration
         The calibration.
     workers : int, optional
         Worker processes of each batch (default one per core; 1 runs in this process).
@@ -51,7 +51,7 @@ class Objective:
         Called with a one-line message after each batch.
     """
 
-    def __init__(self, problem: Problem, workers=None, scheduler=None, log=None):
+    def __init__(self, problem: Calibration, workers=None, scheduler=None, log=None):
         self.problem, self.workers, self.scheduler, self.log = problem, workers, scheduler, log
         self.cache: dict[tuple, np.ndarray] = {}
         self.runs = 0
@@ -115,7 +115,7 @@ def _key(theta) -> tuple:
     return tuple(np.round(np.asarray(theta, dtype=float), 12))
 
 
-def _values(problem: Problem, theta) -> np.ndarray:
+def _values(problem: Calibration, theta) -> np.ndarray:
     return np.where(problem.log, np.exp(theta), theta)
 
 
@@ -156,12 +156,12 @@ class FitResult:
     message: str
 
 
-def fit(problem: Problem, *, workers=None, scheduler=None, log=None) -> FitResult:
+def fit(problem: Calibration, *, workers=None, scheduler=None, log=None) -> FitResult:
     """Fit the parameters: soft-L1 least squares of the D1-band change, within bounds.
 
     Parameters
     ----------
-    problem : Problem
+    problem : Calibration
         The calibration (`trackdyn.calibration.problem.prepare`).
     workers : int, optional
         Worker processes (default one per core; 1 runs in this process).

@@ -60,7 +60,7 @@ FD_STEP = 0.05
 
 
 @dataclass(frozen=True)
-class Problem:
+class Calibration:
     """A calibration ready to run: aligned surveys, measured changes, fit coordinates.
 
     Parameters
@@ -165,7 +165,7 @@ def _fit_coordinates(spec, base: Path, law):
     return tuple(spec.fit.parameters), np.array(log), np.array(lower), np.array(upper)
 
 
-def prepare(spec, base: Path, traffic, law, options) -> Problem:
+def prepare(spec, base: Path, traffic, law, options) -> Calibration:
     """Check the calibration, read and align the surveys, take the measured changes.
 
     Everything is refused here, before any model run.
@@ -225,18 +225,18 @@ def prepare(spec, base: Path, traffic, law, options) -> Problem:
     fit_options = options.model_copy(update={"total_mgt": float(mgt[fitted].max())})
     section = Section("calibration", str(files[0].resolve()), str(supports_file.resolve()))
     first = profiles_at(geometries[0], 0.0, x)
-    return Problem(spec, base, section, tuple(traffic), law, names, log, lower, upper, mgt,
+    return Calibration(spec, base, section, tuple(traffic), law, names, log, lower, upper, mgt,
                    tuple(alignments), grid, x, tuple(geometries), first, valid, use, fitted,
                    options, fit_options)  # fmt: skip
 
 
-def run_laws(problem: Problem, laws, options, *, workers=None, scheduler=None,
+def run_laws(problem: Calibration, laws, options, *, workers=None, scheduler=None,
              keep_failures: bool = False) -> list:  # fmt: skip
     """One deterioration run per law on the first survey, as one batch of Dask tasks.
 
     Parameters
     ----------
-    problem : Problem
+    problem : Calibration
         The calibration.
     laws : sequence of SettlementLaw
         Parameter sets to run.
@@ -265,7 +265,7 @@ class Comparison:
     Parameters
     ----------
     measured, predicted : ndarray
-        (surveys, 2 rails, points) change on ``Problem.x`` [m]; NaN for surveys beyond
+        (surveys, 2 rails, points) change on ``Calibration.x`` [m]; NaN for surveys beyond
         the run's tonnage.
     alignments : tuple of Alignment
         Per survey: shift and correlation against the predicted profile (beyond the run,
@@ -277,12 +277,12 @@ class Comparison:
     alignments: tuple
 
 
-def compare(problem: Problem, ds) -> Comparison:
+def compare(problem: Calibration, ds) -> Comparison:
     """Each survey aligned to the profile a run predicts for its tonnage, and the changes.
 
     Parameters
     ----------
-    problem : Problem
+    problem : Calibration
         The calibration.
     ds : xarray.Dataset
         A run of `run_laws`.
@@ -307,13 +307,13 @@ def compare(problem: Problem, ds) -> Comparison:
     return Comparison(measured, predicted, tuple(alignments))
 
 
-def residuals(problem: Problem, comparison: Comparison) -> np.ndarray:
+def residuals(problem: Calibration, comparison: Comparison) -> np.ndarray:
     """Predicted minus measured D1-band change of the fitted surveys at the residual
     points, both rails [mm].
 
     Parameters
     ----------
-    problem : Problem
+    problem : Calibration
         The calibration.
     comparison : Comparison
         `compare` of a run.

@@ -117,7 +117,7 @@ def alignment_table(spec, problem) -> Table:
     ----------
     spec : trackdyn.commands.calibrate.spec.CalibrationScenario
         The calibration file (its surveys).
-    problem : trackdyn.calibration.problem.Problem
+    problem : trackdyn.calibration.problem.Calibration
         The prepared fit (alignments, which surveys are fitted).
     """
     show = Table(title="Surveys aligned to the first (D1-band cross-correlation)")
@@ -136,7 +136,7 @@ def fitted_table(law: str, problem, result, units: dict) -> Table:
     ----------
     law : str
         Settlement law name.
-    problem : trackdyn.calibration.problem.Problem
+    problem : trackdyn.calibration.problem.Calibration
         The fit (parameter names).
     result : trackdyn.calibration.fit.FitResult
         The fit's result.

@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 
 from trackdyn.calibration.fit import FitResult
-from trackdyn.calibration.problem import Problem
+from trackdyn.calibration.problem import Calibration
 from trackdyn.calibration.surveys import d1_change
 from trackdyn.commands.calibrate.plots import calibration_figure
 from trackdyn.deterioration.law_files import law_file_table, law_table_toml, law_units
@@ -24,7 +24,7 @@ def _rms(values) -> float:
     return float(np.sqrt(np.mean(np.square(values)))) if np.size(values) else np.nan
 
 
-def segment_table(problem: Problem, result: FitResult) -> pd.DataFrame:
+def segment_table(problem: Calibration, result: FitResult) -> pd.DataFrame:
     """Misfit and D1 standard deviation per later survey, rail and segment.
 
     Columns: ``survey``, ``mgt`` [MGT], ``role`` (fit or check), ``rail``,
@@ -37,7 +37,7 @@ def segment_table(problem: Problem, result: FitResult) -> pd.DataFrame:
 
     Parameters
     ----------
-    problem : Problem
+    problem : Calibration
         The calibration.
     result : FitResult
         The fit.
@@ -92,7 +92,7 @@ def sd_errors(table: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def parameter_file(problem: Problem, result: FitResult, where: str) -> str:
+def parameter_file(problem: Calibration, result: FitResult, where: str) -> str:
     """A settlement parameter file (TOML) with the fitted values, for `trackdyn
     deteriorate`'s ``[settlement] file``.
 
@@ -102,7 +102,7 @@ def parameter_file(problem: Problem, result: FitResult, where: str) -> str:
 
     Parameters
     ----------
-    problem : Problem
+    problem : Calibration
         The calibration.
     result : FitResult
         The fit.
@@ -140,12 +140,12 @@ def parameter_file(problem: Problem, result: FitResult, where: str) -> str:
     return header + law_table_toml(s.law, entries, table.get("description"))
 
 
-def write_calibration(problem: Problem, result: FitResult, folder, where: str) -> pd.DataFrame:
+def write_calibration(problem: Calibration, result: FitResult, folder, where: str) -> pd.DataFrame:
     """Write `FILES` into ``folder``; returns the segment table.
 
     Parameters
     ----------
-    problem : Problem
+    problem : Calibration
         The calibration.
     result : FitResult
         The fit.

@@ -10,7 +10,7 @@ def calibration_figure(problem, result, path) -> None:
 
     Parameters
     ----------
-    problem : trackdyn.calibration.problem.Problem
+    problem : trackdyn.calibration.problem.Calibration
         The calibration.
     result : trackdyn.calibration.fit.FitResult
         The fit.

@@ -41,7 +41,7 @@ from typing import Literal
 
 from pydantic import Field, NonNegativeFloat, PositiveFloat, PositiveInt, model_validator
 
-from trackdyn.calibration.problem import Problem, prepare
+from trackdyn.calibration.problem import Calibration, prepare
 from trackdyn.commands.deteriorate.scenario import (
     DeteriorationScenario,
     loop_options,
@@ -124,8 +124,8 @@ def load_calibration(path) -> tuple[CalibrationScenario, Path]:
     return load_toml(CalibrationScenario, path)
 
 
-def calibration_problem(spec: CalibrationScenario, base: Path) -> Problem:
-    """The `Problem` of a calibration file: its traffic, law and loop options resolved,
+def calibration_problem(spec: CalibrationScenario, base: Path) -> Calibration:
+    """The `Calibration` of a calibration file: its traffic, law and loop options resolved,
     the surveys read and aligned (`trackdyn.calibration.problem.prepare`).
 
     Parameters
