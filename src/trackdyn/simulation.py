@@ -12,6 +12,8 @@ spatially varying track stiffness. PhD thesis, University of Pretoria,
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import xarray as xr
 
@@ -81,6 +83,80 @@ def _problem(vehicle, track, o: RunOptions) -> Problem:
     return Problem(m, ContactInput(m, lin, o.nonlinear), c0, speed, dt, n_steps, store_every)
 
 
+@dataclass(frozen=True)
+class Run:
+    """One solved run as the solver leaves it: its problem and stored arrays.
+
+    Parameters
+    ----------
+    problem : Problem
+        The run (model, track input, path, time step, storage).
+    out : dict
+        The solver's stored arrays (`trackdyn.solver.statics.OUTPUTS`).
+    """
+
+    problem: Problem
+    out: dict
+
+    @property
+    def time(self) -> np.ndarray:
+        """Time of each stored step [s]."""
+        p = self.problem
+        return np.arange(p.n_store) * p.store_every * p.dt
+
+    @property
+    def centre(self) -> np.ndarray:
+        """Vehicle centre position at each stored step [m]."""
+        return self.problem.centre0 + self.problem.speed * self.time
+
+    @property
+    def wheel_load(self) -> np.ndarray:
+        """Wheel load of each contact at each stored step, (steps, contacts) [N]."""
+        return self.out["wl"]
+
+
+def run_batch(vehicles: list[Vehicle], tracks, options: list[RunOptions], *,
+              progress: bool = False, newton_max_iter: int = 50) -> list:  # fmt: skip
+    """Run several vehicles over a track side by side; the solver's arrays of each.
+
+    What `simulate_batch` does without building Datasets, for callers that need only a few
+    arrays (the deterioration loop). Parameters as for `simulate_batch`.
+
+    Returns
+    -------
+    list
+        Per run, a `Run` or a `TrackdynInputError`.
+    """
+    if not isinstance(tracks, list | tuple):
+        tracks = [tracks] * len(vehicles)
+    _check_types(vehicles, tracks, options)
+    if not len(vehicles) == len(tracks) == len(options):
+        raise TrackdynInputError(
+            f"simulate_batch: {len(vehicles)} vehicles, {len(tracks)} tracks and "
+            f"{len(options)} run options; give one of each per run"
+        )
+    made: list = []
+    for v, trk, o in zip(vehicles, tracks, options, strict=True):
+        try:
+            made.append(_problem(v, trk, o))
+        except TrackdynInputError as exc:
+            made.append(exc)
+    results: list = list(made)
+    todo = [i for i, p in enumerate(made) if isinstance(p, Problem)]
+    total = sum(made[i].n_steps for i in todo)
+    label = f"{options[0].model} at {options[0].speed_kmh:.0f} km/h [steps]"
+    if len(vehicles) > 1:
+        label = f"{len(vehicles)} runs [steps]"
+    with progress_bar(progress, total, label) as bar:
+        for solver in dict.fromkeys(options[i].solver for i in todo):
+            index = [i for i in todo if options[i].solver == solver]
+            batch = [made[i] for i in index]
+            solved = solve(batch, solver, newton_max_iter=newton_max_iter, advanced=bar.advance)
+            for i, out in zip(index, solved, strict=True):
+                results[i] = out if isinstance(out, Exception) else Run(made[i], out)
+    return results
+
+
 def simulate_batch(
     vehicles: list[Vehicle],
     tracks,
@@ -112,35 +188,10 @@ def simulate_batch(
     list
         Per run, an `xarray.Dataset` (see `simulate`) or a `TrackdynInputError`.
     """
-    if not isinstance(tracks, list | tuple):
-        tracks = [tracks] * len(vehicles)
-    _check_types(vehicles, tracks, options)
-    if not len(vehicles) == len(tracks) == len(options):
-        raise TrackdynInputError(
-            f"simulate_batch: {len(vehicles)} vehicles, {len(tracks)} tracks and "
-            f"{len(options)} run options; give one of each per run"
-        )
-    made: list = []
-    for v, trk, o in zip(vehicles, tracks, options, strict=True):
-        try:
-            made.append(_problem(v, trk, o))
-        except TrackdynInputError as exc:
-            made.append(exc)
-    results: list = list(made)
-    todo = [i for i, p in enumerate(made) if isinstance(p, Problem)]
-    total = sum(made[i].n_steps for i in todo)
-    label = f"{options[0].model} at {options[0].speed_kmh:.0f} km/h [steps]"
-    if len(vehicles) > 1:
-        label = f"{len(vehicles)} runs [steps]"
-    with progress_bar(progress, total, label) as bar:
-        for solver in dict.fromkeys(options[i].solver for i in todo):
-            index = [i for i in todo if options[i].solver == solver]
-            batch = [made[i] for i in index]
-            solved = solve(batch, solver, newton_max_iter=newton_max_iter, advanced=bar.advance)
-            for i, out in zip(index, solved, strict=True):
-                ok = not isinstance(out, Exception)
-                results[i] = _dataset(made[i], vehicles[i], options[i], out) if ok else out
-    return results
+    runs = run_batch(vehicles, tracks, options, progress=progress,
+                     newton_max_iter=newton_max_iter)  # fmt: skip
+    return [r if isinstance(r, Exception) else _dataset(r, v, o)
+            for r, v, o in zip(runs, vehicles, options, strict=True)]  # fmt: skip
 
 
 def _check_types(vehicles, tracks, options) -> None:
@@ -158,11 +209,10 @@ def _check_types(vehicles, tracks, options) -> None:
                 )
 
 
-def _dataset(p: Problem, vehicle, o: RunOptions, out) -> xr.Dataset:
-    time = np.arange(p.n_store) * p.store_every * p.dt
-    centre = p.centre0 + p.speed * time
+def _dataset(run: Run, vehicle, o: RunOptions) -> xr.Dataset:
+    p = run.problem
     flags = dict(dt=p.dt, speed=p.speed, nonlinear=o.nonlinear)
-    return make_dataset(p.model, vehicle, time, centre, out, **flags)
+    return make_dataset(p.model, vehicle, run.time, run.centre, run.out, **flags)
 
 
 def simulate(

@@ -18,7 +18,7 @@ import time
 import numpy as np
 
 from trackdyn.errors import TrackdynInputError
-from trackdyn.simulation import simulate_batch, time_step
+from trackdyn.simulation import run_batch, time_step
 from trackdyn.track.track import RAILS, LinearisedTrack
 from trackdyn.vehicle.models import build_model
 
@@ -56,13 +56,13 @@ def cycles_per_passage(model) -> np.ndarray:
     return np.array([model.axles_per_rail / per_rail[r] for _, _, r in wheels(model)])
 
 
-def passage_loads(ds, ballast, state, model) -> np.ndarray:
+def passage_loads(run, ballast, state, model) -> np.ndarray:
     """Load cycle of every wheel at every sleeper of its rail in one passage [N].
 
     Parameters
     ----------
-    ds : xarray.Dataset
-        Result of `trackdyn.simulation.simulate` (``wheel_load``, ``distance``).
+    run : trackdyn.simulation.Run
+        The solved run (its vehicle centre positions and wheel loads).
     ballast : Ballast
         The section's rails and ballast.
     state : BallastState
@@ -77,8 +77,8 @@ def passage_loads(ds, ballast, state, model) -> np.ndarray:
     """
     pos = ballast.position
     n = pos.size
-    centre = ds.distance.values
-    load = np.maximum(ds.wheel_load.values, 0.0)
+    centre = run.centre
+    load = np.maximum(run.wheel_load, 0.0)
     out = np.zeros((len(wheels(model)), n))
     for r, rail in enumerate(RAILS):
         mine = [(j, c, x) for j, (c, x, rl) in enumerate(wheels(model)) if rl == rail]
@@ -127,9 +127,9 @@ class TrafficRun:
 def vehicle_runs(runs, lins: list[LinearisedTrack], timing: dict) -> list:
     """Run every vehicle of the traffic once over the track as it stands.
 
-    The vehicles run side by side in one batch (`trackdyn.simulation.simulate_batch`),
-    each over its own linearisation of the track. Adds the seconds spent to
-    ``timing["vehicle"]``.
+    The vehicles run side by side in one batch (`trackdyn.simulation.run_batch`), each
+    over its own linearisation of the track; only the solver's arrays come back, no
+    Datasets. Adds the seconds spent to ``timing["vehicle"]``.
 
     Parameters
     ----------
@@ -142,22 +142,22 @@ def vehicle_runs(runs, lins: list[LinearisedTrack], timing: dict) -> list:
 
     Returns
     -------
-    list of xarray.Dataset
-        One result per run (`trackdyn.simulation.simulate`).
+    list of trackdyn.simulation.Run
+        One solved run per vehicle.
     """
     if not runs:
         return []
     clock = time.perf_counter()
     vehicles = [run.traffic.vehicle for run in runs]
-    datasets = simulate_batch(vehicles, list(lins), [run.run for run in runs])
+    solved = run_batch(vehicles, list(lins), [run.run for run in runs])
     timing["vehicle"] += time.perf_counter() - clock
-    for ds in datasets:
-        if isinstance(ds, Exception):
-            raise ds
-    return datasets
+    for result in solved:
+        if isinstance(result, Exception):
+            raise result
+    return solved
 
 
-def rail_seat_loads(runs, datasets, ballast, state, timing: dict) -> list:
+def rail_seat_loads(runs, solved, ballast, state, timing: dict) -> list:
     """Load cycles of one passage of each vehicle, (wheels, sleepers) [N] per run.
 
     The wheel loads of each run go onto the rail beam on ``state`` (`passage_loads`).
@@ -167,8 +167,8 @@ def rail_seat_loads(runs, datasets, ballast, state, timing: dict) -> list:
     ----------
     runs : list of TrafficRun
         The traffic.
-    datasets : list of xarray.Dataset
-        Their results (`vehicle_runs`).
+    solved : list of trackdyn.simulation.Run
+        Their solved runs (`vehicle_runs`).
     ballast : Ballast
         The ballast model of the section.
     state : BallastState
@@ -177,7 +177,7 @@ def rail_seat_loads(runs, datasets, ballast, state, timing: dict) -> list:
         Seconds spent so far, by part.
     """
     clock = time.perf_counter()
-    loads = [passage_loads(ds, ballast, state, run.model)
-             for run, ds in zip(runs, datasets, strict=True)]  # fmt: skip
+    loads = [passage_loads(done, ballast, state, run.model)
+             for run, done in zip(runs, solved, strict=True)]  # fmt: skip
     timing["beam"] += time.perf_counter() - clock
     return loads

@@ -324,7 +324,7 @@ def predict(track: Track, traffic, law, options=None, *, zones=(), progress=Fals
             current = {p: ballast.linearised(lin, state, geometry) for p, lin in lins.items()}
             timing["beam"] += time.perf_counter() - clock
             step_lins = [current[run.lin.static_load] for run in runs]
-            datasets = vehicle_runs(runs, step_lins, timing)
+            solved = vehicle_runs(runs, step_lins, timing)
             target = snap_at[np.searchsorted(snap_at, mgt, side="right")]
             start_level, span, moved, updates = level, None, 0.0, 0
             while span is None or span - moved > 1e-12 * span:
@@ -334,7 +334,7 @@ def predict(track: Track, traffic, law, options=None, *, zones=(), progress=Fals
                         f"{mgt:.3g} MGT: the settlement law follows the load too steeply for a "
                         "stable step; check its load exponent"
                     )
-                loads = rail_seat_loads(runs, datasets, ballast, state, timing)
+                loads = rail_seat_loads(runs, solved, ballast, state, timing)
                 cycles, peak = _cycles(runs, step_lins, loads, shape)
                 settle = _scaled(rate, acc.prepare(cycles))
                 if span is None:  # the accuracy limit, and at least one train
