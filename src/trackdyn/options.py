@@ -32,8 +32,10 @@ from pydantic import (
     Field,
     PositiveFloat,
     PositiveInt,
+    StrictFloat,
     ValidationError,
     field_validator,
+    model_validator,
 )
 
 from trackdyn.errors import TrackdynInputError, unknown
@@ -127,7 +129,13 @@ class VehicleSpec(Strict):
 
     preset: str = "loaded"
     file: Path | None = None
-    overrides: dict[str, float] = Field(default_factory=dict)
+    overrides: dict[str, StrictFloat] = Field(default_factory=dict)
+
+    @model_validator(mode="after")
+    def _one_source(self):
+        if self.file is not None and "preset" in self.model_fields_set:
+            raise ValueError("give a preset or a file, not both")
+        return self
 
     def source(self, base: Path) -> str | Path:
         """The vehicle source (see `vehicle_source`)."""
