@@ -24,6 +24,11 @@ SUPPORT_STIFFNESS = (1e6, 1e10)
 """Range of a support's (linear or linearised) stiffness per rail seat [N/m]: 1 kN/mm, a
 nearly hanging sleeper, to 10 GN/m, ten times slab track."""
 
+MAX_SLEEPER_GAP = 3.0
+"""Largest distance between neighbouring sleepers [m]: five times a 0.6 m spacing, four
+sleepers missing in a row; wider gaps are spans the discretely supported rail of the
+models does not describe."""
+
 WHEEL_LOAD = (1e3, 5e5)
 """Range of a static wheel load [N]: 1 kN, a light trolley, to 500 kN, 2.5 times the
 196 kN wheel of a 40 t heavy-haul axle (a load typed in N or t is refused)."""

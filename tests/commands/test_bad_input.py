@@ -2,8 +2,9 @@
 
 A row gives the command line, the files it reads and a fragment of the expected message.
 In the files and arguments ``{track}`` stands for a folder holding a 300 m section
-(``g.csv``, ``s.csv``), that geometry with a NaN at line 12 (``gnan.csv``) and supports
-covering only its first 50 m (``s50.csv``). Each case
+(``g.csv``, ``s.csv``), that geometry with a NaN at line 12 (``gnan.csv``), supports
+covering only its first 50 m (``s50.csv``) and every 17th sleeper only, 10.2 m apart
+(``s10.csv``). Each case
 runs in a folder of its own, with ``--out out`` unless the row gives ``--out``; afterwards
 that folder holds the row's files and nothing else.
 """
@@ -74,6 +75,16 @@ CASES = [
         {"bad.toml": TRACK},
         "s50.csv: supports cover 0.3 to 49.5 m, the geometry 0 to 300 m",
     ),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": TRACK.replace("s50.csv", "s10.csv")},
+        "s10.csv: sleepers at 0.3 and 10.5 m are 10.2 m apart, more than the plausible 3 m",
+    ),
+    (
+        ["track", "--geometry", "{track}/g.csv", "--supports", "{track}/s10.csv"],
+        {},
+        "s10.csv: sleepers at 0.3 and 10.5 m are 10.2 m apart, more than the plausible 3 m",
+    ),
     (["run", "--out", ""], {}, "--out is empty"),
     (
         ["study", "bad.toml"],
@@ -96,7 +107,7 @@ CASES = [
 
 @pytest.fixture(scope="module")
 def track_folder(tmp_path_factory):
-    """A 300 m section, its geometry with a NaN, and supports covering its first 50 m."""
+    """A 300 m section, its geometry with a NaN, supports covering 50 m or 10 m apart."""
     folder = tmp_path_factory.mktemp("track")
     trk = synthetic_track(300.0, spectrum="fra5", seed=3)
     write_geometry(trk.geometry, folder / "g.csv")
@@ -106,6 +117,8 @@ def track_folder(tmp_path_factory):
     geometry.to_csv(folder / "gnan.csv", index=False)
     rows = pd.read_csv(folder / "s.csv")
     rows[rows["distance_m"] < 50].to_csv(folder / "s50.csv", index=False)
+    every_17th = rows["distance_m"].isin(rows["distance_m"].unique()[::17])
+    rows[every_17th].to_csv(folder / "s10.csv", index=False)
     return folder
 
 

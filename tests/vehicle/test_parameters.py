@@ -29,6 +29,13 @@ def test_base_file_and_overrides(tmp_path):
     assert load_vehicle("loaded-high-damping").rho1 == pytest.approx(120e3)
 
 
+def test_base_file_is_relative_to_the_file(tmp_path, monkeypatch):
+    (tmp_path / "parent.toml").write_text('base = "empty"\n')
+    (tmp_path / "child.toml").write_text('base = "parent.toml"\n')
+    monkeypatch.chdir(tmp_path.parent)
+    assert load_vehicle(tmp_path / "child.toml").m1 == load_vehicle("empty").m1
+
+
 def test_replace_refuses_unknown_name():
     with pytest.raises(TrackdynInputError, match="unknown vehicle parameter 'kappa'"):
         load_vehicle("loaded").replace(kappa=1.0)

@@ -145,6 +145,21 @@ def _check_name(key: str, where: str = "") -> None:
         raise unknown("vehicle parameter", key, PARAMETERS, where)
 
 
+def vehicle_source(name, base: Path | None = None) -> str | Path:
+    """A preset name as it is, or a parameter file (``*.toml``) relative to ``base``.
+
+    Parameters
+    ----------
+    name : str or Path
+        Preset name (``loaded``, ``empty``, ...) or path of a vehicle ``.toml`` file.
+    base : Path, optional
+        Folder a relative file is taken from (the scenario's or vehicle file's folder).
+    """
+    if str(name).endswith(".toml"):
+        return Path(base or ".") / name
+    return str(name)
+
+
 def _resolve(name_or_path) -> Path:
     path = Path(str(name_or_path))
     if path.suffix == ".toml":
@@ -162,7 +177,7 @@ def load_vehicle(name_or_path, **overrides) -> Vehicle:
     """Load a vehicle from a preset name (``loaded``, ``empty``, ...) or a TOML file.
 
     Each parameter is a table with ``value``, ``unit`` and ``source``; a file may name a
-    ``base`` preset or file and give only what differs.
+    ``base`` preset or file (relative to the file) and give only what differs.
 
     Parameters
     ----------
@@ -175,7 +190,7 @@ def load_vehicle(name_or_path, **overrides) -> Vehicle:
     data = read_toml(path)
     values, sources = {}, {}
     if "base" in data:
-        base = load_vehicle(data.pop("base"))
+        base = load_vehicle(vehicle_source(data.pop("base"), path.parent))
         values, sources = base.as_dict(), dict(base.sources)
     name = str(data.pop("name", path.stem))
     for key, entry in data.items():
