@@ -27,6 +27,76 @@ CASES = [
     # (command line, files {name: text}, message fragment)
     (
         ["run", "bad.toml"],
+        {"bad.toml": "[run]\nspeed_kmh = 1e6\n"},
+        "run.speed_kmh: Input should be less than or equal to 400",
+    ),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": '[run]\nspeed_kmh = "60"\n'},
+        "run.speed_kmh: Input should be a valid number",
+    ),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": "[run]\ndt_s = 0.1\n"},
+        "bad.toml: time step dt_s = 0.1 s is beyond the stability limit",
+    ),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": "[vehicle]\noverrides = { muu = 0.3 }\n"},
+        "unknown vehicle parameter 'muu'",
+    ),
+    (["run", "bad.toml"], {"bad.toml": "[vehicle]\noverrides = { mu = 0.9 }\n"}, "locks the wedge"),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": "[vehicle]\noverrides = { k1 = -5.0 }\n"},
+        "k1 is -5 N/m, outside the plausible",
+    ),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": '[vehicle]\npreset = "tanker"\n'},
+        "unknown vehicle preset 'tanker'",
+    ),
+    (["run", "bad.toml"], {"bad.toml": "[run]\nspeed_kmh = 0\n"}, "run.speed_kmh"),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": "[run]\nspeed_kmh = 60\ndt_s = 0.01\n"},
+        "beyond the stability limit",
+    ),
+    (["run", "bad.toml"], {"bad.toml": '[run]\nmodel = "3dof"\n'}, "run.model"),
+    (["run", "bad.toml"], {"bad.toml": "[run]\nspeeed = 3\n"}, "unknown key 'run.speeed'"),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": '[track]\ngeometry = "missing.csv"\nsupports = "missing.csv"\n'},
+        "missing.csv: no such file",
+    ),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": '[track]\ngeometry = "missing.csv"\n'},
+        "give both a geometry and a supports file",
+    ),
+    (["run", "bad.toml"], {"bad.toml": "not toml ["}, "not valid TOML"),
+    (["track", "--wheel-load-kN", "0"], {}, "--wheel-load-kN is 0 kN, outside the plausible"),
+    (["track", "--wheel-load-kN", "-3"], {}, "--wheel-load-kN is -3 kN, outside the plausible"),
+    (["track", "--rail", "UIC99"], {}, "unknown rail section"),
+    (["track", "--wheel-load-kN", "400"], {}, "outside the measured curve"),
+    (["track", "--delta", "1.5"], {}, "delta must be in (0, 1)"),
+    (
+        ["track", "--geometry", "geometry.csv", "--supports", "{track}/s.csv"],
+        {"geometry.csv": "distance_m,left_mm,right_mm\n0,1,1\n0.25,nan,1\n"},
+        "geometry.csv: column 'left_mm' is empty, NaN, infinite or not a number at line 3",
+    ),
+    (
+        ["study", "speed.toml"],
+        {"speed.toml": 'kind = "speed"\n[speed]\nspeeds_kmh = []\n'},
+        "speed.toml: speed.speeds_kmh: List should have at least 1",
+    ),
+    (
+        ["study", "--scheduler", "garbage"],
+        {},
+        "--scheduler 'garbage' is not an address like tcp://HOST:PORT",
+    ),
+    (
+        ["run", "bad.toml"],
         {"bad.toml": "[vehicle]\noverrides = { k1 = 4.0 }\n"},
         "bad.toml: vehicle parameter k1 is 4 N/m, outside the plausible 100000 to 1e+09 N/m",
     ),
