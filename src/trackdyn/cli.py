@@ -24,7 +24,7 @@ app = typer.Typer(
     help="Railway vehicle/track vertical dynamics and track deterioration prediction.",
 )
 console = Console()
-OutOption = Annotated[Path, typer.Option("--out", help="Output folder.")]
+OutOption = Annotated[str, typer.Option("--out", metavar="PATH", help="Output folder.")]
 OverwriteOption = Annotated[
     bool, typer.Option(help="Replace another command's outputs in the output folder.")
 ]
@@ -75,7 +75,7 @@ def track(
     extrapolate: Annotated[
         bool, typer.Option(help="Allow Ps ± ΔP beyond the measured curves.")
     ] = False,
-    out: OutOption = Path("trackdyn-out"),
+    out: OutOption = "trackdyn-out",
     overwrite: OverwriteOption = False,
 ):
     """Analyse a track section: loaded profile, linearised stiffness, geometry quality.
@@ -93,7 +93,7 @@ def run(
     scenario: Annotated[
         Path | None, typer.Argument(help="Scenario TOML; default: the built-in example.")
     ] = None,
-    out: OutOption = Path("trackdyn-out"),
+    out: OutOption = "trackdyn-out",
     overwrite: OverwriteOption = False,
 ):
     """Simulate a vehicle over a track and write results.nc, summary.csv and figures.
@@ -112,7 +112,7 @@ def study(
         Path | None,
         typer.Argument(help="Study TOML; default: the 2-DOF scenario matrix of §5.4.1."),
     ] = None,
-    out: OutOption = Path("trackdyn-out"),
+    out: OutOption = "trackdyn-out",
     overwrite: OverwriteOption = False,
     workers: Annotated[
         int | None, typer.Option(help="Worker processes (default: one per core; 1: serial).")
@@ -134,7 +134,7 @@ def deteriorate(
         Path | None,
         typer.Argument(help="Deterioration scenario TOML; default: the built-in example."),
     ] = None,
-    out: OutOption = Path("trackdyn-out"),
+    out: OutOption = "trackdyn-out",
     overwrite: OverwriteOption = False,
     workers: Annotated[
         int | None,
@@ -158,7 +158,7 @@ def deteriorate(
 @refuse_bad_input
 def calibrate(
     calibration: Annotated[Path, typer.Argument(help="Calibration TOML (surveys, fit).")],
-    out: OutOption = Path("trackdyn-out"),
+    out: OutOption = "trackdyn-out",
     overwrite: OverwriteOption = False,
     workers: Annotated[
         int | None,

@@ -1,5 +1,6 @@
 """The one exception type for bad input, and the checks that raise it."""
 
+import os
 import traceback
 from contextlib import contextmanager
 
@@ -124,13 +125,28 @@ def named(source):
         raise TrackdynInputError(f"{where}: {exc}") from None
 
 
+WORKERS_PER_CORE = 4
+"""Most worker processes per core: more only share the cores and multiply the memory."""
+
+
 def require_workers(workers: int | None) -> None:
-    """Refuse a ``--workers`` count below 1 (None: the default, one per core).
+    """Refuse a ``--workers`` count below 1 or above `WORKERS_PER_CORE` per core.
+
+    A count far above the cores is refused rather than capped: each worker holds a whole
+    run in memory, so such a count ends in killed workers, not in a faster run.
 
     Parameters
     ----------
     workers : int or None
-        Worker processes asked for.
+        Worker processes asked for; None: the default, one per core.
     """
-    if workers is not None and workers < 1:
+    if workers is None:
+        return
+    if workers < 1:
         raise TrackdynInputError(f"--workers must be >= 1, got {workers}")
+    cores = os.cpu_count() or 1
+    if workers > WORKERS_PER_CORE * cores:
+        raise TrackdynInputError(
+            f"--workers {workers} is outside the plausible 1 to {WORKERS_PER_CORE * cores} "
+            f"({WORKERS_PER_CORE} per core on this machine's {cores} cores)"
+        )

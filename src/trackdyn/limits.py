@@ -7,6 +7,8 @@ deviation or a wheel flying off the rail.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from trackdyn.errors import TrackdynInputError
@@ -21,6 +23,57 @@ to cm about its mean, a few dm over long grades."""
 SUPPORT_STIFFNESS = (1e6, 1e10)
 """Range of a support's (linear or linearised) stiffness per rail seat [N/m]: 1 kN/mm, a
 nearly hanging sleeper, to 10 GN/m, ten times slab track."""
+
+MAX_SLEEPER_GAP = 3.0
+"""Largest distance between neighbouring sleepers [m]: five times a 0.6 m spacing, four
+sleepers missing in a row; wider gaps are spans the discretely supported rail of the
+models does not describe."""
+
+WHEEL_LOAD = (1e3, 5e5)
+"""Range of a static wheel load [N]: 1 kN, a light trolley, to 500 kN, 2.5 times the
+196 kN wheel of a 40 t heavy-haul axle (a load typed in N or t is refused)."""
+
+MAX_STEPS = 1e8
+"""Most time steps of one run: about 20 minutes of the compiled scheme; a step count above
+it comes from a time step or a path length typed in the wrong unit."""
+
+VEHICLE = {
+    # Masses [kg] and inertias [kg m^2]: the shipped presets' smallest value / 10 to their
+    # largest x 10 (a mass typed in tonnes is refused), rounded out to a power of ten.
+    "m1": (1e3, 1e6),  # presets 10.4 t empty to 94.4 t loaded
+    "I1": (1e3, 1e6),  # presets 1.5e4 to 1e5
+    "Ip": (1e4, 1e8),  # presets 1.6e5 to 1.3e6
+    "m2": (100.0, 1e5),  # presets 1260
+    "I2": (100.0, 1e5),  # presets 1210
+    "mw1": (100.0, 1e5),  # presets 1778
+    "Iw1": (100.0, 1e5),  # presets 1180
+    "Isf": (10.0, 1e4),  # presets 280
+    # Stiffnesses [N/m]: the presets' value / 10 (rounded out) up to a rigid part; a value
+    # typed in MN/m or kN/mm is refused. kp reaches 1e12, the near-rigid primary of 1e4
+    # times the presets' 20 MN/m that checks the reduced models.
+    "k1": (1e5, 1e9),  # presets 4 MN/m
+    "kp": (1e5, 1e12),  # presets 20 MN/m
+    "k_ss": (1e4, 1e9),  # presets 0.786 MN/m
+    # Damping [N s/m]: 0 (undamped) to 100 MN s/m, 800 times the presets' largest (120 kN s/m).
+    "rho_p": (0.0, 1e8),
+    "rho1": (0.0, 1e8),
+    "rho2": (0.0, 1e8),
+    # The friction law's slope near zero velocity [N s/m]: a numerical regularisation, from
+    # 1 (wedges that never slip) to 1000 times the presets' 1 MN s/m.
+    "C_slope": (1.0, 1e9),
+    # Lengths [m]: the presets' value / 10 to x 10, rounded out to one digit (a length in
+    # mm or cm is refused).
+    "b": (0.09, 10.0),  # presets 0.98
+    "b_cc": (0.4, 50.0),  # presets 4.3
+    "l": (0.05, 6.0),  # presets 0.5675
+    "a": (0.09, 10.0),  # presets 0.9145
+    "x_ss": (0.0, 0.5),  # presets 10 to 45 mm; 0: no preload
+    # Physical bounds: friction coefficients of metal on metal lie below 1 (presets 0.25);
+    # a wedge face between 1 and 89 deg from the vertical (presets 36.3 deg) [rad].
+    "mu": (0.0, 1.0),
+    "alpha_w": (math.radians(1.0), math.radians(89.0)),
+}
+"""Plausible range of each vehicle parameter [SI units] (`trackdyn.vehicle.parameters`)."""
 
 
 def check_within(values, lo: float, hi: float, what: str, unit: str, scale: float = 1.0):

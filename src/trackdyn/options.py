@@ -2,9 +2,9 @@
 
 `RunOptions` is the ``[run]`` table of every scenario kind (run, study, deteriorate) and
 the options argument of `trackdyn.simulate`; a new option is a new field here. `VehicleSpec`
-is the ``[vehicle]`` table, `TrackSpec` the ``[track]`` table; `vehicle_source` is the one
-rule that tells a preset name from a parameter file. `load_toml` reads and validates a
-scenario file of any kind.
+is the ``[vehicle]`` table, `TrackSpec` the ``[track]`` table; `vehicle_source`
+(`trackdyn.vehicle.parameters`) is the one rule that tells a preset name from a parameter
+file. `load_toml` reads and validates a scenario file of any kind.
 
 ```toml
 [run]
@@ -32,13 +32,16 @@ from pydantic import (
     Field,
     PositiveFloat,
     PositiveInt,
+    StrictFloat,
     ValidationError,
     field_validator,
+    model_validator,
 )
 
 from trackdyn.errors import TrackdynInputError, unknown
 from trackdyn.io import read_toml
 from trackdyn.limits import MAX_SPEED_KMH
+from trackdyn.vehicle.parameters import load_vehicle, vehicle_source
 
 
 class Strict(BaseModel):
@@ -107,27 +110,18 @@ class RunOptions(Strict):
         return parse(RunOptions, {**self.model_dump(), **changes}, "run options")
 
 
-def vehicle_source(name, base: Path | None = None) -> str | Path:
-    """A preset name as it is, or a parameter file (``*.toml``) relative to ``base``.
-
-    Parameters
-    ----------
-    name : str or Path
-        Preset name (``loaded``, ``empty``, ...) or path of a vehicle ``.toml`` file.
-    base : Path, optional
-        Folder a relative file is taken from (the scenario's folder).
-    """
-    if str(name).endswith(".toml"):
-        return Path(base or ".") / name
-    return str(name)
-
-
 class VehicleSpec(Strict):
     """``[vehicle]``: a ``preset`` or a parameter ``file``, and ``overrides`` [SI units]."""
 
     preset: str = "loaded"
     file: Path | None = None
-    overrides: dict[str, float] = Field(default_factory=dict)
+    overrides: dict[str, StrictFloat] = Field(default_factory=dict)
+
+    @model_validator(mode="after")
+    def _one_source(self):
+        if self.file is not None and "preset" in self.model_fields_set:
+            raise ValueError("give a preset or a file, not both")
+        return self
 
     def source(self, base: Path) -> str | Path:
         """The vehicle source (see `vehicle_source`)."""
@@ -135,8 +129,6 @@ class VehicleSpec(Strict):
 
     def load(self, base: Path):
         """The vehicle parameter set, overrides applied."""
-        from trackdyn.vehicle.parameters import load_vehicle
-
         return load_vehicle(self.source(base), **self.overrides)
 
 

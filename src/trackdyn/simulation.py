@@ -18,6 +18,7 @@ import numpy as np
 import xarray as xr
 
 from trackdyn.errors import TrackdynInputError
+from trackdyn.limits import MAX_STEPS
 from trackdyn.options import RunOptions
 from trackdyn.progress import progress_bar
 from trackdyn.results import make_dataset
@@ -62,9 +63,14 @@ def _problem(vehicle, track, o: RunOptions) -> Problem:
         else track.linearise(vehicle.static_wheel_load, o.delta, extrapolate=o.extrapolate)
     )
     lo, hi = lin.track.extent
+    for key, value in (("start_m", o.start_m), ("end_m", o.end_m)):
+        if value is not None and not lo <= value <= hi:
+            raise TrackdynInputError(
+                f"{key} = {value:g} m is outside the track, {lo:g} to {hi:g} m"
+            )
     rear, front = m.reach
-    start = lo if o.start_m is None else max(o.start_m, lo)
-    end = hi if o.end_m is None else min(o.end_m, hi)
+    start = lo if o.start_m is None else o.start_m
+    end = hi if o.end_m is None else o.end_m
     c0, c1 = start - rear, end - front
     if c1 <= c0:
         raise TrackdynInputError(
@@ -79,6 +85,11 @@ def _problem(vehicle, track, o: RunOptions) -> Problem:
             f"explicit scheme (highest natural frequency {omega / 2 / np.pi:.1f} Hz)"
         )
     n_steps = int(np.floor((c1 - c0) / (speed * dt))) + 1
+    if n_steps > MAX_STEPS:
+        raise TrackdynInputError(
+            f"time step dt_s = {dt:.3g} s gives {n_steps:.3g} steps over {c1 - c0:.1f} m at "
+            f"{o.speed_kmh:g} km/h, more than the plausible {MAX_STEPS:.0e}"
+        )
     store_every = o.store_every or max(1, round(OUTPUT_STEP / dt))
     return Problem(m, ContactInput(m, lin, o.nonlinear), c0, speed, dt, n_steps, store_every)
 

@@ -84,6 +84,8 @@ def output_folder(out, command: str, overwrite: bool = False):
     overwrite : bool
         Replace the outputs of another command found in ``out``.
     """
+    if not str(out).strip():
+        raise TrackdynInputError("--out is empty: name an output folder")
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise TrackdynInputError(f"--out {out}: exists and is not a folder")

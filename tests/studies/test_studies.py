@@ -112,7 +112,7 @@ def test_cluster_gives_the_serial_results_and_reports_failures(files):
     np.testing.assert_array_equal(serial_ds.wheel_load_psd, cluster_ds.wheel_load_psd)
     failed = serial_table[serial_table["error"] != ""]
     assert list(failed["vehicle"]) == ["bad"]
-    assert "k1 must be > 0" in failed["error"].iloc[0]
+    assert "k1 is -1 N/m, outside the plausible" in failed["error"].iloc[0]
     ok = serial_table[serial_table["error"] == ""]
     assert len(ok) == 4 and ok["dyn_load_sd_kN"].notna().all()
 
@@ -135,6 +135,23 @@ def test_study_command(files, tmp_path):
     }
     table = pd.read_csv(out / "study.csv")
     assert list(table["speed_kmh"]) == [30, 60]
+
+
+def test_sensitivity_study_whose_varied_runs_all_fail(files, tmp_path):
+    # Only the baseline runs: the failed runs are listed, the rest saved with its figures.
+    study = tmp_path / "sens.toml"
+    study.write_text(
+        f'kind = "sensitivity"\n[track]\ngeometry = "{files / "g.csv"}"\n'
+        f'supports = "{files / "s.csv"}"\n[run]\nmodel = "2dof"\n'
+        '[sensitivity]\nparameters = ["mu"]\nfactors = [10.0]\n'
+    )
+    out = tmp_path / "out"
+    result = CliRunner().invoke(app, ["study", str(study), "--out", str(out), "--workers", "1"])
+    assert result.exit_code == 0, result.output
+    assert "failed (parameter=mu, factor=10.0): vehicle parameter mu is 2.5" in result.stdout
+    assert {"study.csv", "tornado.png", "spectra.png"} <= {p.name for p in out.iterdir()}
+    table = pd.read_csv(out / "study.csv", keep_default_na=False)
+    assert list(table["error"] == "") == [True, False]
 
 
 def test_study_refuses_bad_file(tmp_path):

@@ -5,6 +5,7 @@ import math
 import pytest
 
 from trackdyn.errors import TrackdynInputError
+from trackdyn.limits import VEHICLE
 from trackdyn.vehicle.parameters import PARAMETERS, load_vehicle
 
 
@@ -28,6 +29,13 @@ def test_base_file_and_overrides(tmp_path):
     assert load_vehicle("loaded-high-damping").rho1 == pytest.approx(120e3)
 
 
+def test_base_file_is_relative_to_the_file(tmp_path, monkeypatch):
+    (tmp_path / "parent.toml").write_text('base = "empty"\n')
+    (tmp_path / "child.toml").write_text('base = "parent.toml"\n')
+    monkeypatch.chdir(tmp_path.parent)
+    assert load_vehicle(tmp_path / "child.toml").m1 == load_vehicle("empty").m1
+
+
 def test_replace_refuses_unknown_name():
     with pytest.raises(TrackdynInputError, match="unknown vehicle parameter 'kappa'"):
         load_vehicle("loaded").replace(kappa=1.0)
@@ -43,7 +51,10 @@ def test_replace_refuses_unknown_name():
             "unknown vehicle parameter 'kk1'",
         ),
         ('base = "loaded"\n[k1]\nvalue = "four"\nunit = "MN/m"\nsource = "x"\n', "not a number"),
-        ('base = "loaded"\n[k1]\nvalue = -4\nunit = "MN/m"\nsource = "x"\n', "k1 must be > 0"),
+        (
+            'base = "loaded"\n[k1]\nvalue = -4\nunit = "MN/m"\nsource = "x"\n',
+            r"k1 is -4e\+06 N/m, outside the plausible",
+        ),
         ('base = "loaded"\n[mu]\nvalue = 0.8\nunit = "-"\nsource = "x"\n', "locks the wedge"),
         ('[k1]\nvalue = 4\nunit = "MN/m"\nsource = "x"\n', "missing vehicle parameter"),
         ("k1 = [", "not valid TOML"),
@@ -75,3 +86,12 @@ def test_lumped_wheelset_values_are_derived(tmp_path):
     f.write_text('base = "loaded"\n[Iw]\nvalue = 2000\nunit = "kg m^2"\nsource = "x"\n')
     with pytest.raises(TrackdynInputError, match=r"lumped.toml: Iw is derived .*give Iw1"):
         load_vehicle(f)
+
+
+def test_every_parameter_has_a_plausible_range_holding_the_presets():
+    # with a margin of a factor of 2 each side
+    assert set(VEHICLE) == set(PARAMETERS)
+    for preset in ("loaded", "empty", "loaded-high-damping", "empty-high-damping"):
+        for key, value in load_vehicle(preset).as_dict().items():
+            lo, hi = VEHICLE[key]
+            assert lo <= value / 2 and 2 * value <= hi, (preset, key)

@@ -316,7 +316,8 @@ def tornado(table, path, column: str = "dyn_load_sd_kN") -> None:
     ax.set_yticks(y, [r[0] for r in rows])
     ax.axvline(0, color="k", lw=0.8)
     ax.set_xlabel(f"change of {column} from the baseline {base:.2f}")
-    ax.legend(fontsize=8)
+    if rows:  # none when every varied run failed
+        ax.legend(fontsize=8)
     ax.grid(alpha=0.3, axis="x")
     save(fig, path)
 
@@ -338,6 +339,8 @@ def spectra(table, ds, path) -> None:
     label_cols = [c for c in label_cols if ok[c].astype(str).nunique() > 1] or label_cols
     split, rest = (label_cols[0], label_cols[1:]) if len(label_cols) > 1 else (None, label_cols)
     baseline = ok["parameter"] == "baseline" if "parameter" in ok else np.zeros(len(ok), bool)
+    if baseline.all():  # only the baseline ran: one panel
+        split, rest = None, label_cols
     panels = [None] if split is None else list(dict.fromkeys(ok.loc[~baseline, split]))
     fig, axes = plt.subplots(
         len(panels), 1, figsize=(11, 1.5 + 2.6 * len(panels)), sharex=True, squeeze=False

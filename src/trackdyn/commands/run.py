@@ -53,7 +53,7 @@ def run(scenario, out, overwrite: bool, console) -> None:
     ----------
     scenario : path, optional
         Scenario TOML file; None: the built-in example.
-    out : Path
+    out : str or Path
         Output folder.
     overwrite : bool
         Replace another command's outputs in ``out``.
@@ -64,7 +64,8 @@ def run(scenario, out, overwrite: bool, console) -> None:
     from trackdyn.simulation import simulate
 
     spec, base = load_scenario(scenario)
-    vehicle = spec.vehicle.load(base)
+    with named(scenario):
+        vehicle = spec.vehicle.load(base)
     with output_folder(out, "run", overwrite) as stage:
         with console.status("reading the track"):
             trk = spec.track.load(base)

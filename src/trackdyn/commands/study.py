@@ -6,10 +6,14 @@ from pathlib import Path
 
 from trackdyn.commands import plots
 from trackdyn.commands.tables import frame_table
+from trackdyn.errors import TrackdynInputError, named
 from trackdyn.io import write_netcdf
 from trackdyn.options import RunOptions, load_toml
 from trackdyn.staging import output_folder
 from trackdyn.studies.scenarios import Study
+
+STUDY_KEYS = {"kind", "matrix", "sensitivity", "speed"}
+"""Keys of a study file that a run scenario has not: a study file gives at least one."""
 
 
 def load_study(path=None) -> tuple[Study, Path]:
@@ -20,7 +24,13 @@ def load_study(path=None) -> tuple[Study, Path]:
     path : path, optional
         Study TOML file.
     """
-    return load_toml(Study, path, Study(run=RunOptions(model="2dof")))
+    spec, base = load_toml(Study, path, Study(run=RunOptions(model="2dof")))
+    if path is not None and not spec.model_fields_set & STUDY_KEYS:
+        raise TrackdynInputError(
+            f"{path}: no {', '.join(sorted(STUDY_KEYS))}: a run scenario (trackdyn run) "
+            "rather than a study"
+        )
+    return spec, base
 
 
 def write_study(table, ds, study, folder) -> list[str]:
@@ -67,7 +77,7 @@ def study(study_file, out, overwrite: bool, workers, scheduler, console) -> None
     ----------
     study_file : path, optional
         Study TOML file; None: the 2-DOF §5.4.1 matrix.
-    out : Path
+    out : str or Path
         Output folder.
     overwrite : bool
         Replace another command's outputs in ``out``.
@@ -82,7 +92,9 @@ def study(study_file, out, overwrite: bool, workers, scheduler, console) -> None
     from trackdyn.studies.scenarios import tasks
 
     spec, base = load_study(study_file)
-    runs = tasks(spec, base)
+    with named(study_file):
+        spec.track.load(base)  # a bad track file is refused before any run
+        runs = tasks(spec, base)
     with output_folder(out, "study", overwrite) as stage:
         results = run_study(runs, workers=workers, scheduler=scheduler, progress=True)
         table, ds = gather(results)

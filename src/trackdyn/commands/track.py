@@ -25,7 +25,7 @@ import xarray as xr
 
 from trackdyn.commands import plots
 from trackdyn.commands.tables import frame_table
-from trackdyn.errors import TrackdynInputError, require_positive
+from trackdyn.errors import TrackdynInputError
 from trackdyn.io import (
     CHUNK_ROWS,
     SupportRows,
@@ -36,6 +36,7 @@ from trackdyn.io import (
     supports_of,
     write_netcdf,
 )
+from trackdyn.limits import WHEEL_LOAD, check_within
 from trackdyn.staging import output_folder
 from trackdyn.track.analysis import (
     SEGMENT_M,
@@ -318,7 +319,7 @@ def track(
         Rail section name (`trackdyn.track.rails.rail_section`).
     extrapolate : bool
         Allow Ps ± ΔP beyond the measured curves.
-    out : Path
+    out : str or Path
         Output folder.
     overwrite : bool
         Replace another command's outputs in ``out``.
@@ -327,7 +328,7 @@ def track(
     """
     from trackdyn.data import EXAMPLE_GEOMETRY, EXAMPLE_SUPPORTS, example_path
 
-    require_positive("--wheel-load-kN", wheel_load_kN)
+    check_within(wheel_load_kN * 1e3, *WHEEL_LOAD, "--wheel-load-kN", "kN", 1e3)
     if (geometry is None) != (supports is None):
         raise TrackdynInputError("give both --geometry and --supports, or neither for the example")
     if geometry is None:

@@ -6,6 +6,8 @@ import os
 from importlib.resources import files
 from pathlib import Path
 
+import numpy as np
+
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import read_geometry, read_supports
 from trackdyn.track.track import Track
@@ -43,4 +45,25 @@ def load_track(geometry=None, supports=None) -> Track:
         )
     if geometry is None:
         geometry, supports = example_path(EXAMPLE_GEOMETRY), example_path(EXAMPLE_SUPPORTS)
-    return Track(read_geometry(geometry), read_supports(supports))
+    track = Track(read_geometry(geometry), read_supports(supports))
+    check_coverage(track, supports)
+    return track
+
+
+def check_coverage(track: Track, supports) -> None:
+    """Refuse supports that leave more than a sleeper spacing of either end of the geometry.
+
+    Parameters
+    ----------
+    track : Track
+        The track read from the files.
+    supports : path
+        Its supports file, named in the message.
+    """
+    g, s = track.geometry.distance, track.supports.position
+    spacing = float(np.max(np.diff(s), initial=0.0))
+    if s[0] - g[0] > spacing or g[-1] - s[-1] > spacing:
+        raise TrackdynInputError(
+            f"{supports}: supports cover {s[0]:g} to {s[-1]:g} m, the geometry "
+            f"{g[0]:g} to {g[-1]:g} m; give supports along the whole geometry"
+        )

@@ -15,7 +15,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from trackdyn.errors import TrackdynInputError, check_series
-from trackdyn.limits import MAX_PROFILE, SUPPORT_STIFFNESS, check_within
+from trackdyn.limits import MAX_PROFILE, MAX_SLEEPER_GAP, SUPPORT_STIFFNESS, check_within
 from trackdyn.track.support import Curves, linearise_curves
 from trackdyn.track.winkler import modulus_from_stiffness
 
@@ -77,7 +77,8 @@ class Supports:
     Parameters
     ----------
     position : ndarray
-        Sleeper positions along the track, strictly increasing [m].
+        Sleeper positions along the track, strictly increasing, neighbours at most
+        `trackdyn.limits.MAX_SLEEPER_GAP` apart [m].
     left, right : Curves or sequence of SupportCurve
         One curve per sleeper for each rail, kept packed as `Curves`; ``supports.left[i]``
         is the left rail's curve at sleeper ``i``, a `SupportCurve`.
@@ -92,6 +93,14 @@ class Supports:
 
     def __post_init__(self):
         pos = check_series(self.position, min_points=2, where=self.where)
+        gap = np.diff(pos)
+        wide = np.flatnonzero(gap > MAX_SLEEPER_GAP)
+        if wide.size:
+            i = wide[0]
+            raise TrackdynInputError(
+                f"{self.where}: sleepers at {pos[i]:g} and {pos[i + 1]:g} m are {gap[i]:g} m "
+                f"apart, more than the plausible {MAX_SLEEPER_GAP:g} m"
+            )
         object.__setattr__(self, "position", pos)
         for rail in RAILS:
             curves = Curves.of(getattr(self, rail))

@@ -17,6 +17,7 @@ from pathlib import Path
 
 from trackdyn.errors import TrackdynInputError, shown, unknown
 from trackdyn.io import read_toml
+from trackdyn.limits import VEHICLE, check_within
 from trackdyn.units import GRAVITY, si_value
 
 # SI unit of each parameter, and a description for docs and error messages.
@@ -51,7 +52,8 @@ DERIVED: dict[str, tuple[str, str]] = {
 }
 """Seed symbols derived from a parameter (properties of `Vehicle`): the parameter they
 come from and a description, for messages."""
-MAY_BE_ZERO = {"rho_p", "rho1", "rho2", "mu", "x_ss"}
+SHOWN_IN = {"alpha_w": ("deg", math.pi / 180)}
+"""Unit (and its size in SI units) of a parameter in messages, where not its SI unit."""
 PRESETS = files("trackdyn.vehicle").joinpath("presets")
 
 
@@ -63,6 +65,7 @@ class Vehicle:
     The parameters describe single wheelsets (``mw1``, ``Iw1``) and side frames (``m2 / 2``
     each, pitch inertia ``Isf``) as the full model needs them; the lumped values of the
     bogie models are derived from them (`DERIVED`: ``mw = 2 mw1``, ``Iw = 2 Iw1``).
+    A value outside its plausible range (`trackdyn.limits.VEHICLE`) is refused.
     """
 
     m1: float
@@ -91,23 +94,14 @@ class Vehicle:
     sources: dict = field(default_factory=dict, compare=False, repr=False)
 
     def __post_init__(self):
-        for key in PARAMETERS:
+        for key, (unit, _) in PARAMETERS.items():
             value = getattr(self, key)
             if isinstance(value, bool) or not isinstance(value, int | float):
                 raise TrackdynInputError(
                     f"vehicle parameter {key} must be a number, got {shown(value)}"
                 )
-            lower_ok = key in MAY_BE_ZERO
-            if not math.isfinite(value) or value < 0 or (value == 0 and not lower_ok):
-                need = ">= 0" if lower_ok else "> 0"
-                raise TrackdynInputError(
-                    f"vehicle parameter {key} must be {need}, got {shown(value)}"
-                )
-        if not 0 < self.alpha_w < math.pi / 2:
-            raise TrackdynInputError(
-                f"vehicle parameter alpha_w must be in (0, 90) deg, got "
-                f"{math.degrees(self.alpha_w):g} deg"
-            )
+            unit, scale = SHOWN_IN.get(key, (unit, 1.0))
+            check_within(value, *VEHICLE[key], f"vehicle parameter {key}", unit, scale)
         if self.mu >= math.tan(self.alpha_w):
             raise TrackdynInputError(
                 f"vehicle parameter mu = {self.mu:g} locks the wedge: it must be below "
@@ -151,6 +145,21 @@ def _check_name(key: str, where: str = "") -> None:
         raise unknown("vehicle parameter", key, PARAMETERS, where)
 
 
+def vehicle_source(name, base: Path | None = None) -> str | Path:
+    """A preset name as it is, or a parameter file (``*.toml``) relative to ``base``.
+
+    Parameters
+    ----------
+    name : str or Path
+        Preset name (``loaded``, ``empty``, ...) or path of a vehicle ``.toml`` file.
+    base : Path, optional
+        Folder a relative file is taken from (the scenario's or vehicle file's folder).
+    """
+    if str(name).endswith(".toml"):
+        return Path(base or ".") / name
+    return str(name)
+
+
 def _resolve(name_or_path) -> Path:
     path = Path(str(name_or_path))
     if path.suffix == ".toml":
@@ -168,7 +177,7 @@ def load_vehicle(name_or_path, **overrides) -> Vehicle:
     """Load a vehicle from a preset name (``loaded``, ``empty``, ...) or a TOML file.
 
     Each parameter is a table with ``value``, ``unit`` and ``source``; a file may name a
-    ``base`` preset or file and give only what differs.
+    ``base`` preset or file (relative to the file) and give only what differs.
 
     Parameters
     ----------
@@ -181,7 +190,7 @@ def load_vehicle(name_or_path, **overrides) -> Vehicle:
     data = read_toml(path)
     values, sources = {}, {}
     if "base" in data:
-        base = load_vehicle(data.pop("base"))
+        base = load_vehicle(vehicle_source(data.pop("base"), path.parent))
         values, sources = base.as_dict(), dict(base.sources)
     name = str(data.pop("name", path.stem))
     for key, entry in data.items():

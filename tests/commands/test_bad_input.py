@@ -1,0 +1,208 @@
+"""Bad input of every command, one row each: refused with exit code 2, one line, no files.
+
+A row gives the command line, the files it reads and a fragment of the expected message.
+In the files and arguments ``{track}`` stands for a folder holding a 300 m section
+(``g.csv``, ``s.csv``), that geometry with a NaN at line 12 (``gnan.csv``), supports
+covering only its first 50 m (``s50.csv``) and every 17th sleeper only, 10.2 m apart
+(``s10.csv``). Each case
+runs in a folder of its own, with ``--out out`` unless the row gives ``--out``; afterwards
+that folder holds the row's files and nothing else.
+"""
+
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from trackdyn.cli import app
+from trackdyn.io import write_geometry, write_supports
+from trackdyn.track.synthetic import synthetic_track
+
+runner = CliRunner()
+
+WAGON_K1_IN_N = 'base = "loaded"\n[k1]\nvalue = 4.0\nunit = "N/m"\nsource = "typed"\n'
+TRACK = '[track]\ngeometry = "{track}/g.csv"\nsupports = "{track}/s50.csv"\n'
+NAN_TRACK = '[track]\ngeometry = "{track}/gnan.csv"\nsupports = "{track}/s.csv"\n'
+
+CASES = [
+    # (command line, files {name: text}, message fragment)
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": "[run]\nspeed_kmh = 1e6\n"},
+        "run.speed_kmh: Input should be less than or equal to 400",
+    ),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": '[run]\nspeed_kmh = "60"\n'},
+        "run.speed_kmh: Input should be a valid number",
+    ),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": "[run]\ndt_s = 0.1\n"},
+        "bad.toml: time step dt_s = 0.1 s is beyond the stability limit",
+    ),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": "[vehicle]\noverrides = { muu = 0.3 }\n"},
+        "unknown vehicle parameter 'muu'",
+    ),
+    (["run", "bad.toml"], {"bad.toml": "[vehicle]\noverrides = { mu = 0.9 }\n"}, "locks the wedge"),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": "[vehicle]\noverrides = { k1 = -5.0 }\n"},
+        "k1 is -5 N/m, outside the plausible",
+    ),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": '[vehicle]\npreset = "tanker"\n'},
+        "unknown vehicle preset 'tanker'",
+    ),
+    (["run", "bad.toml"], {"bad.toml": "[run]\nspeed_kmh = 0\n"}, "run.speed_kmh"),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": "[run]\nspeed_kmh = 60\ndt_s = 0.01\n"},
+        "beyond the stability limit",
+    ),
+    (["run", "bad.toml"], {"bad.toml": '[run]\nmodel = "3dof"\n'}, "run.model"),
+    (["run", "bad.toml"], {"bad.toml": "[run]\nspeeed = 3\n"}, "unknown key 'run.speeed'"),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": '[track]\ngeometry = "missing.csv"\nsupports = "missing.csv"\n'},
+        "missing.csv: no such file",
+    ),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": '[track]\ngeometry = "missing.csv"\n'},
+        "give both a geometry and a supports file",
+    ),
+    (["run", "bad.toml"], {"bad.toml": "not toml ["}, "not valid TOML"),
+    (["track", "--wheel-load-kN", "0"], {}, "--wheel-load-kN is 0 kN, outside the plausible"),
+    (["track", "--wheel-load-kN", "-3"], {}, "--wheel-load-kN is -3 kN, outside the plausible"),
+    (["track", "--rail", "UIC99"], {}, "unknown rail section"),
+    (["track", "--wheel-load-kN", "400"], {}, "outside the measured curve"),
+    (["track", "--delta", "1.5"], {}, "delta must be in (0, 1)"),
+    (
+        ["track", "--geometry", "geometry.csv", "--supports", "{track}/s.csv"],
+        {"geometry.csv": "distance_m,left_mm,right_mm\n0,1,1\n0.25,nan,1\n"},
+        "geometry.csv: column 'left_mm' is empty, NaN, infinite or not a number at line 3",
+    ),
+    (
+        ["study", "speed.toml"],
+        {"speed.toml": 'kind = "speed"\n[speed]\nspeeds_kmh = []\n'},
+        "speed.toml: speed.speeds_kmh: List should have at least 1",
+    ),
+    (
+        ["study", "--scheduler", "garbage"],
+        {},
+        "--scheduler 'garbage' is not an address like tcp://HOST:PORT",
+    ),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": "[vehicle]\noverrides = { k1 = 4.0 }\n"},
+        "bad.toml: vehicle parameter k1 is 4 N/m, outside the plausible 100000 to 1e+09 N/m",
+    ),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": "[vehicle]\noverrides = { m1 = 94.4 }\n"},
+        "vehicle parameter m1 is 94.4 kg, outside the plausible 1000 to 1e+06 kg",
+    ),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": "[vehicle]\noverrides = { kp = 1e15 }\n"},
+        "vehicle parameter kp is 1e+15 N/m, outside the plausible 100000 to 1e+12 N/m",
+    ),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": '[vehicle]\noverrides = { mu = "0.3" }\n'},
+        "bad.toml: vehicle.overrides.mu: Input should be a valid number",
+    ),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": '[vehicle]\nfile = "wagon.toml"\n', "wagon.toml": WAGON_K1_IN_N},
+        "wagon.toml: vehicle parameter k1 is 4 N/m, outside the plausible",
+    ),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": '[vehicle]\npreset = "empty"\nfile = "wagon.toml"\n'},
+        "bad.toml: vehicle: give a preset or a file, not both",
+    ),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": "[run]\ndt_s = 1e-9\n"},
+        "bad.toml: time step dt_s = 1e-09 s gives",
+    ),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": "[run]\nend_m = 5000.0\n"},
+        "bad.toml: end_m = 5000 m is outside the track, 0.3 to 999.9 m",
+    ),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": "[run]\nstart_m = -500.0\n"},
+        "bad.toml: start_m = -500 m is outside the track, 0.3 to 999.9 m",
+    ),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": TRACK},
+        "s50.csv: supports cover 0.3 to 49.5 m, the geometry 0 to 300 m",
+    ),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": TRACK.replace("s50.csv", "s10.csv")},
+        "s10.csv: sleepers at 0.3 and 10.5 m are 10.2 m apart, more than the plausible 3 m",
+    ),
+    (
+        ["track", "--geometry", "{track}/g.csv", "--supports", "{track}/s10.csv"],
+        {},
+        "s10.csv: sleepers at 0.3 and 10.5 m are 10.2 m apart, more than the plausible 3 m",
+    ),
+    (["run", "--out", ""], {}, "--out is empty"),
+    (
+        ["study", "bad.toml"],
+        {"bad.toml": "[run]\nspeed_kmh = 60\n"},
+        "bad.toml: no kind, matrix, sensitivity, speed: a run scenario",
+    ),
+    (
+        ["study", "bad.toml"],
+        {"bad.toml": 'kind = "speed"\n' + NAN_TRACK},
+        "gnan.csv: column 'left_mm' is empty, NaN, infinite or not a number at line 12",
+    ),
+    (["study", "--workers", "100000"], {}, "--workers 100000 is outside the plausible 1 to"),
+    (
+        ["track", "--wheel-load-kN", "0.001"],
+        {},
+        "--wheel-load-kN is 0.001 kN, outside the plausible 1 to 500 kN",
+    ),
+]
+
+
+@pytest.fixture(scope="module")
+def track_folder(tmp_path_factory):
+    """A 300 m section, its geometry with a NaN, supports covering 50 m or 10 m apart."""
+    folder = tmp_path_factory.mktemp("track")
+    trk = synthetic_track(300.0, spectrum="fra5", seed=3)
+    write_geometry(trk.geometry, folder / "g.csv")
+    write_supports(trk.supports, folder / "s.csv")
+    geometry = pd.read_csv(folder / "g.csv")
+    geometry.loc[10, "left_mm"] = float("nan")
+    geometry.to_csv(folder / "gnan.csv", index=False)
+    rows = pd.read_csv(folder / "s.csv")
+    rows[rows["distance_m"] < 50].to_csv(folder / "s50.csv", index=False)
+    every_17th = rows["distance_m"].isin(rows["distance_m"].unique()[::17])
+    rows[every_17th].to_csv(folder / "s10.csv", index=False)
+    return folder
+
+
+@pytest.mark.parametrize(("args", "files", "message"), CASES)
+def test_bad_input_is_refused(tmp_path, monkeypatch, track_folder, args, files, message):
+    monkeypatch.chdir(tmp_path)
+    folder = track_folder.as_posix()
+    for name, text in files.items():
+        (tmp_path / name).write_text(text.replace("{track}", folder))
+    args = [a.replace("{track}", folder) for a in args]
+    if "--out" not in args:
+        args += ["--out", "out"]
+    result = runner.invoke(app, args)
+    assert result.exit_code == 2, result.output
+    assert message in result.stderr, result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1  # one line, no traceback
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(files)  # nothing written
