@@ -1,17 +1,17 @@
-"""`trackdyn track`: a long track analysed section by section, then its files and figures.
+"""`trackdyn track`: a long track analysed piece by piece, then its files and figures.
 
 The memory taken does not grow with the track's length: the geometry and supports files
-are read a piece at a time (`trackdyn.io`) and the track is cut into sections of about
-`SECTION_M`. Each section holds `MARGIN_M` of track each side of its core, so the band-pass
+are read a piece at a time (`trackdyn.io`) and the track is cut into pieces of about
+`PIECE_M`. Each piece holds `MARGIN_M` of track each side of its core, so the band-pass
 filters of the quality bands settle (within about one longest wavelength, 70 m for D2)
-before the core; of each section only the core is kept, and the cores joined give what the
+before the core; of each piece only the core is kept, and the cores joined give what the
 whole track read at once gives.
 
 Sections are cut only at geometry samples that lie on a quality segment boundary (200 m
 apart from the first sample of the track) and start at such a sample: the segments, and the
 grid on which `trackdyn.track.quality.longitudinal_level` resamples an uneven profile, are
 then those of the whole track. A geometry file with no sample on a segment boundary is read
-as one section.
+as one piece.
 """
 
 from __future__ import annotations
@@ -49,24 +49,24 @@ from trackdyn.track.analysis import (
 from trackdyn.track.rails import rail_section
 from trackdyn.track.track import RAILS, Geometry, Track
 
-SECTION_M = 10_000.0
-"""Length of a section's core [m], at least; a multiple of the segment length."""
+PIECE_M = 10_000.0
+"""Length of a piece's core [m], at least; a multiple of the segment length."""
 MARGIN_M = 1000.0
-"""Track read each side of a section's core [m]: D2 segment SD within 2e-8 mm of the whole
+"""Track read each side of a piece's core [m]: D2 segment SD within 2e-8 mm of the whole
 track's on a synthetic profile (2e-6 mm with 700 m, 2e-4 mm with 400 m)."""
 PAD_M = 50.0
-"""Supports read beyond each end of a section's geometry, so sleepers bracket it [m]."""
+"""Supports read beyond each end of a piece's geometry, so sleepers bracket it [m]."""
 _TOL = 1e-9 * SEGMENT_M  # as segment_sd's tolerance [m]
 
 
 @dataclass(frozen=True)
-class Section:
-    """A section of a long track and the part of it that is its own.
+class Piece:
+    """A piece of a long track (a read chunk) and the part of it that is its own.
 
     Parameters
     ----------
     track : Track
-        The section with its margins.
+        The piece with its margins.
     keep : tuple of float
         Its core, ``[lo, hi)`` [m]; infinite at the ends of the track.
     """
@@ -125,17 +125,17 @@ def _rail_rows(path, rail: str, rows: int) -> _Rows:
     return _Rows(pieces, lambda r: r.distance, SupportRows.take, SupportRows.concat)
 
 
-def track_sections(
-    geometry, supports, length: float = SECTION_M, margin: float = MARGIN_M, rows=CHUNK_ROWS
-) -> Iterator[Section]:
-    """The track of a geometry and a supports file, section by section.
+def track_pieces(
+    geometry, supports, length: float = PIECE_M, margin: float = MARGIN_M, rows=CHUNK_ROWS
+) -> Iterator[Piece]:
+    """The track of a geometry and a supports file, piece by piece.
 
     Parameters
     ----------
     geometry, supports : path
         Geometry and supports CSV files (as `trackdyn.data.load_track` reads).
     length : float
-        Least length of a section's core [m].
+        Least length of a piece's core [m].
     margin : float
         Track each side of a core [m].
     rows : int
@@ -143,8 +143,8 @@ def track_sections(
 
     Yields
     ------
-    Section
-        Consecutive sections; their cores cover the track once.
+    Piece
+        Consecutive pieces; their cores cover the track once.
     """
     geo = _geometry_rows(geometry, rows)
     rails = [_rail_rows(supports, rail, rows) for rail in RAILS]
@@ -155,7 +155,7 @@ def track_sections(
         end = np.inf if cut is None else cut + margin
         if not all([r.reach(end + PAD_M) for r in rails]):  # every file read that far
             cut, end = None, np.inf
-        if cut is None:  # the last section: the rest of both files
+        if cut is None:  # the last piece: the rest of both files
             for r in rails:
                 r.reach(np.inf)
             last = max((r.distance[-1] for r in rails if r.distance.size), default=np.inf)
@@ -164,7 +164,7 @@ def track_sections(
         part = geo.rows if cut is None else geo.up_to(end)
         found = [r.rows if cut is None else r.up_to(end + PAD_M) for r in rails]
         track = Track(Geometry(*part, str(geometry)), supports_of(found, supports))
-        yield Section(track, (lo, np.inf if cut is None else cut))
+        yield Piece(track, (lo, np.inf if cut is None else cut))
         if cut is None:
             return
         d = geo.distance
@@ -214,8 +214,8 @@ def _read_curve(path, rail: str, position: float):
     return rail_curves(SupportRows.concat(found), rail, path)[1][0]
 
 
-def analyse_sections(geometry, supports, static_load, delta, rail_section, **options):
-    """The analysis of `trackdyn.track.analysis` on a long track, section by section.
+def analyse_pieces(geometry, supports, static_load, delta, rail_section, **options):
+    """The analysis of `trackdyn.track.analysis` on a long track, piece by piece.
 
     Parameters
     ----------
@@ -229,7 +229,7 @@ def analyse_sections(geometry, supports, static_load, delta, rail_section, **opt
         Rail of the voided-sleeper deflection basin.
     **options
         Passed to `Track.linearise`, and ``length``, ``margin``, ``rows`` to
-        `track_sections`.
+        `track_pieces`.
 
     Returns
     -------
@@ -237,16 +237,16 @@ def analyse_sections(geometry, supports, static_load, delta, rail_section, **opt
         As `track_dataset` gives for the whole track.
     picks : list of CurvePick
         The curves of the load-deflection figure, as `curve_picks` picks them over the
-        whole track (a curve not kept from its section is read again from the file).
+        whole track (a curve not kept from its piece is read again from the file).
     basin : tuple
         `voided_basin` over the most voided sleeper of the track.
     """
     cutting = {k: options.pop(k) for k in ("length", "margin", "rows") if k in options}
     parts, kept, best, basin, offset = [], ({}, {}), None, None, 0
-    for section in track_sections(geometry, supports, **cutting):
-        lin = section.track.linearise(static_load, delta, **options)
-        ds = track_dataset(lin, section.keep)
-        first = int(np.searchsorted(lin.track.supports.position, section.keep[0] - _TOL))
+    for piece in track_pieces(geometry, supports, **cutting):
+        lin = piece.track.linearise(static_load, delta, **options)
+        ds = track_dataset(lin, piece.keep)
+        first = int(np.searchsorted(lin.track.supports.position, piece.keep[0] - _TOL))
         core = slice(first, first + ds.sizes["sleeper"])
         r, i = most_voided(lin, core)
         key = (-lin.seating_gap()[r, i], r, offset + i - first)
@@ -267,7 +267,7 @@ def analyse_sections(geometry, supports, static_load, delta, rail_section, **opt
 
 
 def _join(parts: list[xr.Dataset]) -> xr.Dataset:
-    """The sections' datasets (from `track_dataset`) joined along the track."""
+    """The pieces' datasets (from `track_dataset`) joined along the track."""
     first, along = parts[0], ("distance", "sleeper", "segment")
     variables = {}
     for name, var in first.variables.items():
@@ -284,7 +284,7 @@ def write_track_outputs(ds: xr.Dataset, picks, basin, folder) -> pd.DataFrame:
     Parameters
     ----------
     ds : xarray.Dataset
-        Result of `trackdyn.track.analysis.track_dataset` (or of the sections of a long
+        Result of `trackdyn.track.analysis.track_dataset` (or of the pieces of a long
         track, joined).
     picks : list of CurvePick
         Curves of the load-deflection figure (`trackdyn.track.analysis.curve_picks`).
@@ -335,8 +335,8 @@ def track(
         geometry, supports = example_path(EXAMPLE_GEOMETRY), example_path(EXAMPLE_SUPPORTS)
     section = rail_section(rail)
     with output_folder(out, "track", overwrite) as stage:
-        with console.status("reading and linearising the track, section by section"):
-            ds, picks, basin = analyse_sections(
+        with console.status("reading and linearising the track, piece by piece"):
+            ds, picks, basin = analyse_pieces(
                 geometry, supports, wheel_load_kN * 1e3, delta, section, extrapolate=extrapolate
             )
         table = write_track_outputs(ds, picks, basin, stage)

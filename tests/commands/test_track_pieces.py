@@ -1,10 +1,10 @@
-"""A long track read section by section gives what the whole track read at once gives."""
+"""A long track read piece by piece gives what the whole track read at once gives."""
 
 import numpy as np
 import pytest
 import xarray as xr
 
-from trackdyn.commands.track import analyse_sections, track_sections
+from trackdyn.commands.track import analyse_pieces, track_pieces
 from trackdyn.data import load_track
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import write_geometry, write_supports
@@ -27,16 +27,16 @@ def files(tmp_path_factory):
     return folder / "geometry.csv", folder / "supports.csv"
 
 
-def test_sections_cover_the_track_in_cores(files):
-    keeps = [s.keep for s in track_sections(*files, **CUTTING)]
+def test_pieces_cover_the_track_in_cores(files):
+    keeps = [s.keep for s in track_pieces(*files, **CUTTING)]
     assert len(keeps) == 3 and keeps[0][0] == -np.inf and keeps[-1][1] == np.inf
     assert all(a[1] == b[0] for a, b in zip(keeps, keeps[1:], strict=False))
 
 
-def test_sections_give_the_whole_track_results(files):
+def test_pieces_give_the_whole_track_results(files):
     lin = load_track(*files).linearise(PS, 0.3)
     whole = track_dataset(lin)
-    ds, picks, basin = analyse_sections(*files, PS, 0.3, rail_section("60E1"), **CUTTING)
+    ds, picks, basin = analyse_pieces(*files, PS, 0.3, rail_section("60E1"), **CUTTING)
     for name in ("k2", "ys", "loaded_profile", "unloaded_profile", "sleeper_distance"):
         np.testing.assert_array_equal(ds[name].values, whole[name].values)
     np.testing.assert_array_equal(ds.distance.values, whole.distance.values)
@@ -47,7 +47,7 @@ def test_sections_give_the_whole_track_results(files):
     rail, x0, with_gap, _ = voided_basin(lin, rail_section("60E1"))
     assert (basin[0], basin[1]) == (rail, x0)
     np.testing.assert_array_equal(basin[2].deflection, with_gap.deflection)
-    # the figure's curves (kept from their section, or read again from the file) are the
+    # the figure's curves (kept from their piece, or read again from the file) are the
     # whole track's extremes and median, as read at once
     softest, stiffest = np.argmin(lin.k2), np.argmax(lin.k2)
     median = np.argsort(lin.k2, axis=None)[lin.k2.size // 2]
@@ -72,21 +72,21 @@ def test_a_bad_row_in_the_last_piece_is_named_by_its_line(files, tmp_path):
     bad.write_text("\n".join(lines) + "\n")
     with pytest.raises(TrackdynInputError, match=f"{bad}: .*at line {n - 2}$") as whole:
         load_track(geometry, bad)
-    with pytest.raises(TrackdynInputError) as sections:
-        analyse_sections(geometry, bad, PS, 0.3, rail_section("60E1"), **CUTTING)
-    assert str(sections.value) == str(whole.value)
+    with pytest.raises(TrackdynInputError) as pieces:
+        analyse_pieces(geometry, bad, PS, 0.3, rail_section("60E1"), **CUTTING)
+    assert str(pieces.value) == str(whole.value)
     rows = geometry.read_text().splitlines()
     rows[-2], rows[-3] = rows[-3], rows[-2]
     bad = tmp_path / "geometry.csv"
     bad.write_text("\n".join(rows) + "\n")
     with pytest.raises(TrackdynInputError, match=f"at line {len(rows) - 1}$") as whole:
         load_track(bad, supports)
-    with pytest.raises(TrackdynInputError) as sections:
-        analyse_sections(bad, supports, PS, 0.3, rail_section("60E1"), **CUTTING)
-    assert str(sections.value) == str(whole.value)
+    with pytest.raises(TrackdynInputError) as pieces:
+        analyse_pieces(bad, supports, PS, 0.3, rail_section("60E1"), **CUTTING)
+    assert str(pieces.value) == str(whole.value)
 
 
 def test_joined_dataset_writes_like_the_whole(files, tmp_path):
-    ds, _, _ = analyse_sections(*files, PS, 0.3, rail_section("60E1"), **CUTTING)
+    ds, _, _ = analyse_pieces(*files, PS, 0.3, rail_section("60E1"), **CUTTING)
     ds.to_netcdf(tmp_path / "t.nc")
     assert xr.load_dataset(tmp_path / "t.nc").sizes == ds.sizes
