@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from trackdyn.beam.static import SupportCurves, linear_supports, solve_beam
+from trackdyn.beam.static import BeamSupports, linear_supports, solve_beam
 from trackdyn.errors import TrackdynInputError
 from trackdyn.track import winkler
 from trackdyn.track.rails import rail_section
@@ -182,7 +182,7 @@ BILINEAR_F = [0.0, 10e3, 110e3]
 
 def bilinear(position):
     n = len(position)
-    return SupportCurves(position, np.tile(BILINEAR_D, (n, 1)), np.tile(BILINEAR_F, (n, 1)))
+    return BeamSupports(position, np.tile(BILINEAR_D, (n, 1)), np.tile(BILINEAR_F, (n, 1)))
 
 
 def inverse(force):
@@ -257,7 +257,7 @@ def test_bilinear_track_equilibrium_and_load_step_independence():
 
 
 def test_force_and_tangent():
-    curves = SupportCurves(
+    curves = BeamSupports(
         [0.0, 1.0, 2.0],
         [[0.0, 1e-3, 2e-3], [1e-3, 2e-3, 3e-3], [0.0, 1e-3, 2e-3]],
         [[0.0, 10e3, 30e3], [0.0, 10e3, 30e3], [0.0, 0.0, 5e3]],
@@ -268,7 +268,7 @@ def test_force_and_tangent():
     f, k = curves.force_and_tangent(np.array([-1e-3, 1e-3, 0.0]))
     assert f == pytest.approx([0.0, 0.0, 0.0])  # uplift, at the gap, on a flat start
     assert k == pytest.approx([0.0, 10e6, 0.0])  # right-hand derivative at a kink
-    pulling = SupportCurves(curves.position, curves.deflection, curves.force, tensionless=False)
+    pulling = BeamSupports(curves.position, curves.deflection, curves.force, tensionless=False)
     assert pulling.force_and_tangent(np.array([-1e-3, 0.0, 0.0]))[0] == pytest.approx(
         [-10e3, -10e3, 0.0]
     )
@@ -320,7 +320,7 @@ def curves_with(**change):
 )
 def test_bad_support_curves(args, match):
     with pytest.raises(TrackdynInputError, match=match):
-        SupportCurves(**args)
+        BeamSupports(**args)
 
 
 @pytest.mark.parametrize(

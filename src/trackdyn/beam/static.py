@@ -35,7 +35,7 @@ def _rows(bad, what, values=None):
 
 
 @dataclass(frozen=True)
-class SupportCurves:
+class BeamSupports:
     """Per-support load-deflection curves of the sleeper/ballast springs (rail seat force).
 
     The force is piecewise linear between the points, continues with the last segment's
@@ -61,12 +61,12 @@ class SupportCurves:
     tensionless: bool = True
 
     def __post_init__(self):
-        pos = _frozen("SupportCurves.position", self.position, 1)
-        d = _frozen("SupportCurves.deflection", self.deflection, 2)
-        f = _frozen("SupportCurves.force", self.force, 2)
+        pos = _frozen("BeamSupports.position", self.position, 1)
+        d = _frozen("BeamSupports.deflection", self.deflection, 2)
+        f = _frozen("BeamSupports.force", self.force, 2)
         if pos.size == 0 or d.shape[0] != pos.size or d.shape[1] < 2 or f.shape != d.shape:
             raise TrackdynInputError(
-                f"SupportCurves: deflection and force must both have shape (n, m >= 2) with"
+                f"BeamSupports: deflection and force must both have shape (n, m >= 2) with"
                 f" n = {pos.size} supports, got {d.shape} and {f.shape}"
             )
         _rows(~np.isfinite(pos), "position is not finite")
@@ -105,7 +105,7 @@ class SupportCurves:
         return np.where(on, f0 + slope * (y - d0), 0.0), np.where(on, slope, 0.0)
 
 
-def linear_supports(position, stiffness, gap=0.0, *, tensionless=True) -> SupportCurves:
+def linear_supports(position, stiffness, gap=0.0, *, tensionless=True) -> BeamSupports:
     """Linear springs, one per support, with optional seating gaps.
 
     Parameters
@@ -117,11 +117,11 @@ def linear_supports(position, stiffness, gap=0.0, *, tensionless=True) -> Suppor
     gap : float or array_like, optional
         Seating gap, scalar or one per support, >= 0 [m].
     tensionless : bool, optional
-        See :class:`SupportCurves` [-].
+        See :class:`BeamSupports` [-].
 
     Returns
     -------
-    SupportCurves
+    BeamSupports
     """
     pos = _frozen("position", position, 1)
     try:
@@ -133,7 +133,7 @@ def linear_supports(position, stiffness, gap=0.0, *, tensionless=True) -> Suppor
     _rows(~(np.isfinite(g) & (g >= 0)), "gap must be finite and >= 0 m", g)
     d = np.stack([g, g + 1e-3], axis=1)
     f = np.stack([np.zeros_like(k), k * 1e-3], axis=1)
-    return SupportCurves(pos, d, f, tensionless=bool(tensionless))
+    return BeamSupports(pos, d, f, tensionless=bool(tensionless))
 
 
 @dataclass(frozen=True)
@@ -255,7 +255,7 @@ def solve_beam(
 
     Parameters
     ----------
-    supports : SupportCurves
+    supports : BeamSupports
         At least two supports.
     EI : float
         Rail bending stiffness [N m^2].
@@ -277,8 +277,8 @@ def solve_beam(
     -------
     BeamSolution
     """
-    if not isinstance(supports, SupportCurves) or supports.position.size < 2:
-        raise TrackdynInputError("supports must be a SupportCurves with at least 2 supports")
+    if not isinstance(supports, BeamSupports) or supports.position.size < 2:
+        raise TrackdynInputError("supports must be a BeamSupports with at least 2 supports")
     _check("EI", EI)
     _check("max_element", max_element)
     _check("tol", tol)
