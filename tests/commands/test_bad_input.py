@@ -26,6 +26,11 @@ NAN_TRACK = '[track]\ngeometry = "{track}/gnan.csv"\nsupports = "{track}/s.csv"\
 CASES = [
     # (command line, files {name: text}, message fragment)
     (
+        ["deteriorate", "bad.toml"],
+        {"bad.toml": "[loop]\nsegment_length_m = 1e6\ntotal_mgt = 0.1\n"},
+        "segment_length_m = 1e+06 m is longer than the track",
+    ),
+    (
         ["run", "bad.toml"],
         {"bad.toml": "[run]\nspeed_kmh = 1e6\n"},
         "run.speed_kmh: Input should be less than or equal to 400",

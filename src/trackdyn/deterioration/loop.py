@@ -264,6 +264,12 @@ def predict(track: Track, traffic, law, options=None, *, zones=(), progress=Fals
     limit = float(require_positive("max_step_settlement", o.max_step_settlement))
     every = float(require_positive("snapshot_every_mgt", o.snapshot_every_mgt))
     require_positive("min_step_passages", o.min_step_passages)
+    length = track.extent[1] - track.extent[0]
+    if o.segment_length > length:
+        raise TrackdynInputError(
+            f"segment_length_m = {o.segment_length:g} m is longer than the track "
+            f"({length:g} m); the D1 SD needs at least one whole segment"
+        )
     d1_sd(track.geometry, track.extent, o.segment_length)  # refuses too short a section now
     if o.start not in STARTS:
         raise TrackdynInputError(f"start must be one of {', '.join(STARTS)}; got {o.start!r}")
