@@ -86,6 +86,7 @@ def folder(tmp_path_factory):
     write_geometry(other.geometry, path / "other.csv")
     survey = pd.read_csv(path / "survey_2.csv")
     survey.drop(index=range(400, 480)).to_csv(path / "gap.csv", index=False)  # 20 m missing
+    survey.iloc[:400].to_csv(path / "short.csv", index=False)  # its first 100 m of 200 m
     (path / "calibration.toml").write_text(calibration_text())
     return path
 
@@ -164,6 +165,8 @@ BAD = {
                       "below fit.min_correlation = 0.7"),
     "gap": (calibration_text(surveys=("survey_1.csv", "gap.csv", "survey_3.csv")),
             "gap of 20.25 m after 97.05 m"),
+    "short": (calibration_text(surveys=("survey_1.csv", "survey_2.csv", "short.csv")),
+              "short.csv: the surveys share only"),
     "tonnage": (calibration_text(mgt=(0.0, 5.0, 2.0)), "is not above the 5 of the one before"),
     "parameter": (calibration_text(parameters=("K_s", "K_z")),
                   "'K_z' is not a parameter of the power law"),

@@ -38,7 +38,8 @@ REFINE = 1.0
 """Half-width of the search of the alignment to a predicted profile [m]."""
 
 MIN_OVERLAP = 0.5
-"""Shortest overlap of a shifted survey with the first, as a fraction of the shorter [-]."""
+"""Shortest overlap of a shifted survey with the first, as a fraction of the shorter, and
+of all surveys together as a fraction of the first [-]."""
 
 
 def read_survey(path) -> Geometry:
@@ -150,7 +151,8 @@ def align(reference: Geometry, survey: Geometry, max_shift: float, around: float
 
 def common_grid(reference: Geometry, surveys, shifts, extent, margin=0.0) -> np.ndarray:
     """Indices of the first survey's distances covered by every aligned survey with
-    ``margin`` to spare, and inside ``extent``.
+    ``margin`` to spare, and inside ``extent``; refused when that is less than
+    `MIN_OVERLAP` of the first survey's supported length (surveys of different lengths).
 
     Parameters
     ----------
@@ -166,8 +168,16 @@ def common_grid(reference: Geometry, surveys, shifts, extent, margin=0.0) -> np.
         Distance the shifts may still move by [m].
     """
     pairs = list(zip(surveys, shifts, strict=True))
-    lo = max([extent[0]] + [s.distance[0] + d + margin for s, d in pairs])
-    hi = min([extent[1]] + [s.distance[-1] + d - margin for s, d in pairs])
+    starts = [s.distance[0] + d + margin for s, d in pairs]
+    ends = [s.distance[-1] + d - margin for s, d in pairs]
+    lo, hi = max([extent[0], *starts]), min([extent[1], *ends])
+    a, b = max(extent[0], reference.distance[0]), min(extent[1], reference.distance[-1])
+    if hi - lo < MIN_OVERLAP * (b - a):
+        short = pairs[int(np.argmax(starts) if lo - a > b - hi else np.argmin(ends))][0]
+        raise TrackdynInputError(
+            f"{short.where}: the surveys share only {lo:.1f}-{hi:.1f} m of the first survey's "
+            f"{a:.1f}-{b:.1f} m; surveys of the same stretch are needed (at least half in common)"
+        )
     return np.flatnonzero((reference.distance >= lo) & (reference.distance <= hi))
 
 
