@@ -27,6 +27,11 @@ CASES = [
     # (command line, files {name: text}, message fragment)
     (
         ["deteriorate", "bad.toml"],
+        {"bad.toml": "[settlement]\nrate_cov = 100\n[loop]\ntotal_mgt = 0.1\n"},
+        "rate_cov is 100.0, outside the plausible 0 to 3",
+    ),
+    (
+        ["deteriorate", "bad.toml"],
         {"bad.toml": "[loop]\nsegment_length_m = 1e6\ntotal_mgt = 0.1\n"},
         "segment_length_m = 1e+06 m is longer than the track",
     ),

@@ -56,6 +56,10 @@ from trackdyn.units import GRAVITY
 VOID_NEIGHBOURS = 5
 """Sleepers each side whose median seating gap counts as seating of the whole track."""
 
+MAX_RATE_COV = 3.0
+"""Largest settlement-rate coefficient of variation accepted [-]: a typing error beyond
+(a percentage typed for a fraction), not a judgement on ballast."""
+
 RAIL_CORRELATION = 0.7
 """Correlation of the left and right rails' rate fields [-]; illustrative, the value
 `trackdyn.track.synthetic.synthetic_track` uses for its stiffness fields."""
@@ -77,8 +81,11 @@ def rate_field(n: int, spacing: float, cov: float, correlation_length: float, se
     seed : int or tuple of int
         Seed of the field.
     """
-    if not 0 <= cov < np.inf:
-        raise TrackdynInputError(f"rate_cov must be >= 0, got {shown(cov)}")
+    if not 0 <= cov <= MAX_RATE_COV:
+        raise TrackdynInputError(
+            f"rate_cov is {shown(cov)}, outside the plausible 0 to {MAX_RATE_COV:g} (a "
+            "coefficient of variation, not a percentage)"
+        )
     if not 0 < correlation_length < np.inf:
         raise TrackdynInputError(
             f"rate_correlation_length must be > 0, got {shown(correlation_length)}"

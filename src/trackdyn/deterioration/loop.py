@@ -317,7 +317,8 @@ def predict(track: Track, traffic, law, options=None, *, zones=(), progress=Fals
             if len(steps["start"]) >= o.max_steps:
                 raise TrackdynInputError(
                     f"more than max_steps = {o.max_steps} steps needed to reach {total:g} MGT "
-                    f"(at {mgt:.3g} MGT); raise max_step_settlement or max_steps"
+                    f"(at {mgt:.3g} MGT); raise max_step_settlement_mm or max_steps, or check "
+                    "the settlement law's parameters"
                 )
             lengths = np.diff(np.array(steps["start"][-RUNAWAY_STEPS:] + [mgt]))
             if per_mgt > 0 and lengths.size == RUNAWAY_STEPS and np.all(lengths * per_mgt < 1):
