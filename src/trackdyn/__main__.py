@@ -7,11 +7,18 @@ Ctrl-C ends the command with exit code 130 and no partial output at any moment
 """
 
 import os
+import signal
 import sys
+
+
+def _exit_interrupted(signum, frame) -> None:
+    os._exit(130)  # before anything is written there is nothing to clean up
 
 
 def main():
     """Run the command-line interface."""
+    for sig in (signal.SIGINT, signal.SIGTERM):  # first thing, before any heavy import
+        signal.signal(sig, _exit_interrupted)
     from trackdyn.staging import handle_interrupts
 
     handle_interrupts()

@@ -8,7 +8,8 @@ another command's outputs is refused unless ``overwrite`` is given.
 An interrupt (Ctrl-C, SIGTERM) ends the process at once with exit code 130: staging
 folders and output folders this process created are removed, child processes (local Dask
 workers) are killed. While files are being moved into place the interrupt waits for the
-move to finish (a few renames), so a folder never holds half of a run.
+move to finish (a few renames), so a folder never holds half of a run. A staging folder
+left by a process killed outright (SIGKILL) is removed by the next command writing there.
 """
 
 from __future__ import annotations
@@ -99,7 +100,8 @@ def output_folder(out, command: str, overwrite: bool = False):
     created = not out.exists()
     try:
         out.mkdir(parents=True, exist_ok=True)
-        stage = Path(tempfile.mkdtemp(prefix=".staging-", dir=out))
+        _remove_stale_stages(out)
+        stage = Path(tempfile.mkdtemp(prefix=f".staging-{os.getpid()}-", dir=out))
     except OSError as exc:
         raise TrackdynInputError(f"--out {out}: cannot write there ({exc.strerror})") from None
     if created:
@@ -115,6 +117,25 @@ def output_folder(out, command: str, overwrite: bool = False):
         raise
     finally:
         _cleanup[:] = [p for p in _cleanup if p not in (out, stage)]
+
+
+def _remove_stale_stages(out: Path) -> None:
+    """Remove staging folders left by processes that no longer run (killed with SIGKILL,
+    which no handler sees); their process id is in their name."""
+    for stage in out.glob(".staging-*"):
+        pid = stage.name.split("-")[1]
+        if pid.isdigit() and not _running(int(pid)):
+            shutil.rmtree(stage, ignore_errors=True)
+
+
+def _running(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
 
 
 def _commit(out: Path, stage: Path, command: str, previous: dict) -> None:

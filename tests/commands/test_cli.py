@@ -173,3 +173,24 @@ def test_study_table_fits_80_columns_without_cutting_headers():
     text = console.export_text()
     assert "…" not in text and "vehicle" in text and "damping" in text and "[m/s²]" in text
     assert max(len(line) for line in text.splitlines()) <= 80
+
+
+def test_a_staging_folder_of_a_killed_process_is_removed_by_the_next_run(tmp_path):
+    """SIGKILL leaves `.staging-<pid>-*` behind (no handler runs); the next command writing
+    into the folder removes it, and leaves a live process's staging folder alone."""
+    import os
+    import subprocess
+    import sys
+
+    from trackdyn.staging import output_folder
+
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True).stdout.strip()  # fmt: skip
+    out = tmp_path / "out"
+    (out / f".staging-{dead}-abc").mkdir(parents=True)
+    (out / f".staging-{dead}-abc" / "half.nc").write_text("half written")
+    (out / f".staging-{os.getppid()}-def").mkdir()  # the test runner's parent: running
+    with output_folder(out, "run") as stage:
+        (stage / "results.nc").write_text("whole")
+    names = sorted(p.name for p in out.iterdir())
+    assert names == [f".staging-{os.getppid()}-def", ".trackdyn.json", "results.nc"]
