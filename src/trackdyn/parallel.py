@@ -11,10 +11,12 @@ from __future__ import annotations
 
 import functools
 import os
+import threading
+from concurrent.futures import CancelledError
 from contextlib import contextmanager
 from contextvars import ContextVar
 
-from trackdyn.errors import TrackdynInputError, require_workers
+from trackdyn.errors import TrackdynInputError, error_message, require_workers
 from trackdyn.progress import progress_bar
 
 
@@ -31,12 +33,7 @@ def _client(workers: int | None, scheduler: str | None):
             raise TrackdynInputError(
                 f"--scheduler {scheduler!r} is not an address like tcp://HOST:PORT ({exc})"
             ) from None
-        try:
-            return Client(scheduler, timeout="10s"), None
-        except (OSError, TimeoutError) as exc:
-            raise TrackdynInputError(
-                f"cannot reach the Dask scheduler {scheduler}: {exc}"
-            ) from None
+        return _connect(Client, scheduler), None
     # Two Dask defaults made a run (1 km, 11-DOF) take 0.56-0.78 s in a worker instead of
     # 0.38 s: MALLOC_TRIM_THRESHOLD_ turns off glibc's adaptive mmap threshold, so every
     # large array is mmapped and page-faulted afresh; and the statistical profiler takes
@@ -55,6 +52,34 @@ def _client(workers: int | None, scheduler: str | None):
             dashboard_address=":0",
         )
     return Client(cluster), cluster
+
+
+CONNECT_TIMEOUT = 10.0
+"""Seconds allowed to reach a Dask scheduler and hear it answer as one [s]."""
+
+
+def _connect(client_class, scheduler: str):
+    """A client of the scheduler at ``scheduler``, or a one-line refusal within about
+    `CONNECT_TIMEOUT`: Dask's own timeout covers the connection, not a listener that
+    accepts and never answers (another service on that port), so the handshake runs in
+    a thread that is given up on."""
+    result: dict = {}
+
+    def attempt():
+        try:
+            result["client"] = client_class(scheduler, timeout=f"{CONNECT_TIMEOUT:g}s")
+        except Exception as exc:  # noqa: BLE001 - reported below as the refusal
+            result["error"] = exc
+
+    thread = threading.Thread(target=attempt, daemon=True)
+    thread.start()
+    thread.join(CONNECT_TIMEOUT + 2.0)
+    if "client" in result:
+        return result["client"]
+    why = error_message(result["error"]) if "error" in result else "no answer"
+    raise TrackdynInputError(
+        f"cannot reach a Dask scheduler at {scheduler} within {CONNECT_TIMEOUT:g} s ({why})"
+    )
 
 
 _shared: ContextVar = ContextVar("trackdyn_shared_client", default=None)
@@ -148,6 +173,12 @@ def run_tasks(
             for _ in as_completed(futures):
                 bar.advance()
             return client.gather(futures)
+        except (CancelledError, OSError) as exc:  # the scheduler went away mid-run
+            where = f" at {scheduler}" if scheduler else ""
+            reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+            raise TrackdynInputError(
+                f"lost the Dask scheduler{where} during the run; nothing was written ({reason})"
+            ) from None
         finally:
             if shared is None:
                 client.close()
