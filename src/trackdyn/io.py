@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 
 from trackdyn.errors import TrackdynInputError, check_series
+from trackdyn.limits import MAX_SAMPLE_SPACING
 from trackdyn.track.support import Curves
 from trackdyn.track.track import RAILS, Geometry, Supports
 from trackdyn.units import UNITS
@@ -119,11 +120,18 @@ def geometry_pieces(path, rows: int = CHUNK_ROWS) -> Iterator[tuple[np.ndarray, 
 
 def _geometry(frame: pd.DataFrame, path) -> Geometry:
     """Geometry of a table read from ``path``; messages count the rows of the whole file."""
-    distance, _ = column(frame, "distance", "length", path)
+    distance, name = column(frame, "distance", "length", path)
     try:
         check_series(distance, min_points=2, where=str(path))
     except TrackdynInputError as exc:  # rows in the file count the header line
         raise TrackdynInputError(_file_rows(str(exc), frame.index, 2, "line")) from None
+    spacing = float(np.median(np.diff(distance)))
+    if spacing > MAX_SAMPLE_SPACING:
+        raise TrackdynInputError(
+            f"{path}: the profile samples are {spacing:g} m apart by column {name!r}; the D1 "
+            f"band (3-25 m) needs them at most {MAX_SAMPLE_SPACING:g} m apart (a wrong "
+            "length unit?)"
+        )
     left, _ = column(frame, "left", "length", path)
     right, _ = column(frame, "right", "length", path)
     try:

@@ -24,6 +24,10 @@ SUPPORT_STIFFNESS = (1e6, 1e10)
 """Range of a support's (linear or linearised) stiffness per rail seat [N/m]: 1 kN/mm, a
 nearly hanging sleeper, to 10 GN/m, ten times slab track."""
 
+MAX_SAMPLE_SPACING = 1.5
+"""Largest median spacing of a geometry's profile samples [m]: half the shortest D1
+wavelength (3 m); recording cars sample every 0.25-0.5 m, so wider is a wrong unit."""
+
 MAX_SLEEPER_GAP = 3.0
 """Largest distance between neighbouring sleepers [m]: five times a 0.6 m spacing, four
 sleepers missing in a row; wider gaps are spans the discretely supported rail of the

@@ -23,8 +23,25 @@ WAGON_K1_IN_N = 'base = "loaded"\n[k1]\nvalue = 4.0\nunit = "N/m"\nsource = "typ
 TRACK = '[track]\ngeometry = "{track}/g.csv"\nsupports = "{track}/s50.csv"\n'
 NAN_TRACK = '[track]\ngeometry = "{track}/gnan.csv"\nsupports = "{track}/s.csv"\n'
 
+GEOMETRY_KM_HOLDING_M = "distance_km,left_mm,right_mm\n" + "".join(
+    f"{0.25 * i:g},0,0\n" for i in range(1201)
+)  # 300 m of samples 0.25 m apart, the column saying km
+
 CASES = [
     # (command line, files {name: text}, message fragment)
+    (
+        ["run", "bad.toml"],
+        {
+            "bad.toml": '[track]\ngeometry = "gkm.csv"\nsupports = "{track}/s.csv"\n',
+            "gkm.csv": GEOMETRY_KM_HOLDING_M,
+        },
+        "gkm.csv: the profile samples are 250 m apart by column 'distance_km'",
+    ),
+    (
+        ["deteriorate", "bad.toml"],
+        {"bad.toml": "[settlement]\noverrides = { K_s = -0.5 }\n[loop]\ntotal_mgt = 0.1\n"},
+        "[settlement] overrides of [power] settlement parameter K_s must be > 0",
+    ),
     (
         ["deteriorate", "bad.toml"],
         {"bad.toml": "[settlement]\nrate_cov = 100\n[loop]\ntotal_mgt = 0.1\n"},

@@ -199,4 +199,6 @@ def load_law(name: str, path=None, kind: str = "open", **overrides) -> LawParame
     try:
         return cls(**values)
     except TrackdynInputError as exc:
-        raise TrackdynInputError(f"{where}: {label} {exc}") from None
+        named = [k for k in overrides if f"parameter {k} " in f"{exc} "]
+        source = f"[settlement] overrides of {label}" if named else f"{where}: {label}"
+        raise TrackdynInputError(f"{source} {exc}") from None
