@@ -30,6 +30,11 @@ GEOMETRY_KM_HOLDING_M = "distance_km,left_mm,right_mm\n" + "".join(
 CASES = [
     # (command line, files {name: text}, message fragment)
     (
+        ["deteriorate", "bad.toml"],
+        {"bad.toml": "[settlement]\noverrides = { K_s = 0.5 }\n[loop]\ntotal_mgt = 0.1\n"},
+        "K_s = 0.5 m is outside the plausible 1e-05 to 0.01 m",
+    ),
+    (
         ["run", "bad.toml"],
         {
             "bad.toml": '[track]\ngeometry = "gkm.csv"\nsupports = "{track}/s.csv"\n',
@@ -40,7 +45,7 @@ CASES = [
     (
         ["deteriorate", "bad.toml"],
         {"bad.toml": "[settlement]\noverrides = { K_s = -0.5 }\n[loop]\ntotal_mgt = 0.1\n"},
-        "[settlement] overrides of [power] settlement parameter K_s must be > 0",
+        "[settlement] overrides of [power] K_s = -0.5 m is outside the plausible",
     ),
     (
         ["deteriorate", "bad.toml"],

@@ -210,6 +210,9 @@ def test_bad_law_name_value_and_file(tmp_path):
     with pytest.raises(TrackdynInputError, match="unknown settlement law 'linear'"):
         load_law("linear")
     with pytest.raises(TrackdynInputError, match="beta must be <= 1"):
+        PowerLaw(K_s=0.5e-3, beta=1.5, **COMMON)
+    # an override outside the file's min and max (settlement.toml: beta 0.05 to 1)
+    with pytest.raises(TrackdynInputError, match="beta = 1.5 - is outside the plausible 0.05 to 1"):
         load_law("power", beta=1.5)
     with pytest.raises(
         TrackdynInputError, match="unknown settlement parameter of the power law 'gamma'"

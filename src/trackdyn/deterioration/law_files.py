@@ -25,6 +25,8 @@ from __future__ import annotations
 import json
 from importlib.resources import files
 
+import numpy as np
+
 from trackdyn.deterioration.settlement import LAWS, LawParameters
 from trackdyn.errors import TrackdynInputError, unknown
 from trackdyn.io import read_toml
@@ -170,7 +172,8 @@ def load_law(name: str, path=None, kind: str = "open", **overrides) -> LawParame
         Zone kind (`trackdyn.deterioration.zones`): ``open`` (the law's table), or a kind
         whose sub-table ``[<name>.<kind>]`` replaces some of the parameters.
     **overrides : float
-        Parameter values replacing the file's [SI units] (for every kind).
+        Parameter values replacing the file's [SI units] (for every kind); refused
+        outside the file's ``min`` and ``max`` where it gives them (a unit typed wrong).
     """
     cls, table, where = _law_table(name, path)
     if kind != "open":
@@ -193,6 +196,15 @@ def load_law(name: str, path=None, kind: str = "open", **overrides) -> LawParame
     if extra:
         raise unknown(f"settlement parameter of the {name} law", extra[0], expected)
     values.update({k: float(v) for k, v in overrides.items()})
+    bounds = law_bounds(name, path)
+    for key, value in overrides.items():
+        lo, hi = bounds.get(key, (-np.inf, np.inf))
+        if not lo <= value <= hi:
+            raise TrackdynInputError(
+                f"[settlement] overrides of {label} {key} = {value:g} {expected[key]} is "
+                f"outside the plausible {lo:g} to {hi:g} {expected[key]} (min and max of "
+                f"{where}; overrides are in SI units)"
+            )
     missing = [k for k in expected if k not in values]
     if missing:
         raise TrackdynInputError(f"{where}: {label} missing parameter {missing[0]}")

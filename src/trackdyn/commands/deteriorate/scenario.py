@@ -56,6 +56,7 @@ from pydantic import (
     NonNegativeFloat,
     PositiveFloat,
     PositiveInt,
+    StrictFloat,
     field_validator,
     model_validator,
 )
@@ -77,7 +78,7 @@ class TrafficSpec(Strict):
     ``passages_per_mgt`` [-], optional ``label``."""
 
     vehicle: str = "loaded"
-    overrides: dict[str, float] = Field(default_factory=dict)
+    overrides: dict[str, StrictFloat] = Field(default_factory=dict)
     speed_kmh: float = Field(60.0, gt=0, le=MAX_SPEED_KMH)
     passages_per_mgt: NonNegativeFloat
     label: str | None = None
@@ -103,7 +104,7 @@ class SettlementSpec(Strict):
 
     law: str = "power"
     file: Path | None = None
-    overrides: dict[str, float] = Field(default_factory=dict)
+    overrides: dict[str, StrictFloat] = Field(default_factory=dict)
     rate_cov: NonNegativeFloat = _default("rate_cov")
     rate_correlation_length_m: PositiveFloat = _default("rate_correlation_length")
     seed: int = Field(0, ge=0)
