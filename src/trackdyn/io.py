@@ -48,6 +48,27 @@ def _read_csv(path, **options) -> pd.DataFrame:
         raise TrackdynInputError(f"{path}: not a readable CSV file ({exc})") from None
 
 
+def read_table(path, required: tuple[str, ...]) -> pd.DataFrame:
+    """A small CSV table of text cells (a sections list, a zone table), with its
+    ``required`` columns and at least one row; line ``i + 2`` of the file is row ``i``.
+
+    Parameters
+    ----------
+    path : path
+        The CSV file.
+    required : tuple of str
+        Columns it must have.
+    """
+    frame = _read_csv(path, dtype=str)
+    frame.columns = [str(c).strip() for c in frame.columns]
+    missing = [c for c in required if c not in frame.columns]
+    if missing:
+        raise TrackdynInputError(f"{path}: no column {missing[0]!r} ({','.join(required)})")
+    if frame.empty:
+        raise TrackdynInputError(f"{path}: no rows")
+    return frame
+
+
 def _read_chunks(path, rows: int, **options) -> Iterator[pd.DataFrame]:
     """The CSV ``rows`` data rows at a time; each frame's index counts data rows from 0."""
     with _read_csv(path, chunksize=rows, **options) as reader:

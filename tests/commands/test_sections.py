@@ -68,7 +68,7 @@ def test_one_and_two_workers_give_identical_results(folder):
     ("text", "message"),
     [
         ("name,geometry\na,x.csv\n", "no column 'supports'"),
-        ("name,geometry,supports\n", "no sections listed"),
+        ("name,geometry,supports\n", "no rows"),
         ("name,geometry,supports\na,nope.csv,nope.csv\n", "line 2: geometry file 'nope.csv'"),
         (
             "name,geometry,supports\n"

@@ -33,6 +33,7 @@ import numpy as np
 import pandas as pd
 
 from trackdyn.errors import TrackdynInputError, shown, unknown
+from trackdyn.io import read_table
 
 KINDS = ("open", "structure", "approach")
 """Zone kinds with parameters in the shipped parameter file; a file may add its own."""
@@ -132,21 +133,10 @@ def read_zones(path, load) -> list[Zone]:
         kind.
     """
     path = Path(path)
-    if not path.is_file():
-        raise TrackdynInputError(f"{path}: no such file")
-    try:
-        frame = pd.read_csv(path, comment="#", skipinitialspace=True, dtype=str)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-        raise TrackdynInputError(f"{path}: not a readable CSV file ({exc})") from None
-    frame.columns = [str(c).strip() for c in frame.columns]
-    missing = [c for c in ("start_m", "end_m", "kind") if c not in frame.columns]
-    if missing:
-        raise TrackdynInputError(f"{path}: no column {missing[0]!r} (start_m,end_m,kind)")
+    frame = read_table(path, ("start_m", "end_m", "kind"))
     extra = [c for c in frame.columns if c not in ("start_m", "end_m", "kind", *OPTIONAL)]
     if extra:
         raise unknown("column", extra[0], ("start_m", "end_m", "kind", *OPTIONAL), f"{path}: ")
-    if frame.empty:
-        raise TrackdynInputError(f"{path}: no zones listed")
     zones = []
     for i, row in enumerate(frame.to_dict("records")):
         line = f"{path}: line {i + 2}"

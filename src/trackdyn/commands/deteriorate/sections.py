@@ -17,14 +17,13 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-import pandas as pd
-
 from trackdyn.commands.deteriorate.scenario import loop_options, resolve_inputs
 from trackdyn.data import EXAMPLE_ZONES, example_path
 from trackdyn.deterioration.law_files import load_law
 from trackdyn.deterioration.runs import Section, SectionTask
 from trackdyn.deterioration.zones import read_zones
 from trackdyn.errors import TrackdynInputError
+from trackdyn.io import read_table
 
 NAME = re.compile(r"^[A-Za-z0-9_.-]+$")
 """Section names become parts of file names."""
@@ -40,17 +39,7 @@ def read_sections(path) -> list[Section]:
         The CSV file.
     """
     path = Path(path)
-    if not path.is_file():
-        raise TrackdynInputError(f"{path}: no such file")
-    try:
-        frame = pd.read_csv(path, comment="#", skipinitialspace=True, dtype=str)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-        raise TrackdynInputError(f"{path}: not a readable CSV file ({exc})") from None
-    missing = [c for c in ("name", "geometry", "supports") if c not in frame.columns]
-    if missing:
-        raise TrackdynInputError(f"{path}: no column {missing[0]!r} (name,geometry,supports)")
-    if frame.empty:
-        raise TrackdynInputError(f"{path}: no sections listed")
+    frame = read_table(path, ("name", "geometry", "supports"))
     sections, seen = [], set()
     for i, row in enumerate(frame.itertuples(index=False)):
         line = f"{path}: line {i + 2}"
