@@ -31,6 +31,26 @@ CASES = [
     # (command line, files {name: text}, message fragment)
     (
         ["deteriorate", "bad.toml"],
+        {"bad.toml": '[maintenance]\npolicy = "fixed"\n'},
+        "maintenance policy 'fixed' needs interval_mgt",
+    ),
+    (
+        ["deteriorate", "bad.toml"],
+        {"bad.toml": "[loop]\ntotal_mgt = 5\n[maintenance]\nhorizon_years = 3\nannual_mgt = 10\n"},
+        "give the horizon as [loop] total_mgt or as [maintenance] horizon_years",
+    ),
+    (
+        ["deteriorate", "bad.toml"],
+        {"bad.toml": "[maintenance]\nhorizon_years = 3\n"},
+        "give horizon_years and annual_mgt together",
+    ),
+    (
+        ["deteriorate", "bad.toml"],
+        {"bad.toml": "[maintenance]\nrecovery_slope = 1.5\n"},
+        "recovery_slope",
+    ),
+    (
+        ["deteriorate", "bad.toml"],
         {"bad.toml": "[settlement]\noverrides = { K_s = 0.5 }\n[loop]\ntotal_mgt = 0.1\n"},
         "K_s = 0.5 m is outside the plausible 1e-05 to 0.01 m",
     ),

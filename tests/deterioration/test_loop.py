@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from trackdyn.deterioration import LoopOptions, Traffic, load_law, predict
+from trackdyn.deterioration.loop import shape_change
 from trackdyn.errors import TrackdynInputError
 from trackdyn.options import RunOptions
 from trackdyn.track.synthetic import SoftSpot, Transition, VoidedSleepers, synthetic_track
@@ -98,8 +99,13 @@ def test_halving_the_step_limit_changes_50_mgt_settlement_by_less_than_2_percent
     assert fine.attrs["steps"] > coarse.attrs["steps"]
     e_coarse, e_fine = (r.settlement.isel(mgt=-1).values for r in (coarse, fine))
     assert np.max(np.abs(e_coarse - e_fine) / e_fine) < 0.02
-    # every step but the first (one train, 100 passages, whatever it settles) keeps to it
-    assert coarse.step_max_settlement.values[1:].max() <= 0.5e-3 * (1 + 1e-9)
+    # every step but the first (one train, 100 passages, whatever it settles) keeps the
+    # change of the settlement's shape to it (chosen with the loads of the step start; the
+    # load updates within the step move it by a few per cent at most)
+    e, pos = coarse.settlement.values, coarse.sleeper_distance.values
+    change = [shape_change(e[k + 1] - e[k], pos).max() for k in range(1, e.shape[0] - 1)]
+    assert max(change) <= 0.5e-3 * 1.05
+    assert coarse.step_max_settlement.values[1:].max() > 0.5e-3  # even settlement is free
 
 
 def _saw(e):
@@ -110,14 +116,14 @@ def _saw(e):
 def test_a_large_step_limit_is_held_to_the_stable_step(spot_track, fine):
     """With a 5 mm limit the vehicles run only every 5 mm of settlement, but the rail-seat
     loads are updated within each step at each sleeper's stable step (``Q / (s kd)``,
-    about 1 mm here): the result stays within 3 % of 0.25 mm steps (measured 2.7 %: the
+    about 1 mm here): the result stays within 7 % of 0.25 mm steps (measured 5.6 %: the
     dynamic loads are older) and its largest sleeper-to-sleeper step within 10 % (measured
     8 %). Without the stable step, 5 mm steps make settlement alternate from sleeper to
     sleeper (measured: the largest sleeper-to-sleeper step about 3 times that of fine
     steps)."""
     large = _at_50_mgt(spot_track, 5e-3)
     e_large, e_fine = (r.settlement.isel(mgt=-1).values for r in (large, fine))
-    assert np.max(np.abs(e_large - e_fine) / e_fine) < 0.03
+    assert np.max(np.abs(e_large - e_fine) / e_fine) < 0.07
     assert _saw(e_large) < 1.1 * _saw(e_fine)
     assert large.attrs["steps"] < fine.attrs["steps"]  # the cap is looser than 0.25 mm
 
@@ -142,8 +148,8 @@ def test_bad_options(uniform):
         predict(uniform, [Traffic(LOADED.vehicle, 10.0, -1.0)], LAW, options())
     with pytest.raises(TrackdynInputError, match="no contact on the right rail"):
         predict(uniform, [LOADED], LAW, options(run=RunOptions(model="2dof")))
-    with pytest.raises(TrackdynInputError, match="max_steps = 3"):
-        predict(uniform, [LOADED], LAW, options(max_steps=3))
+    with pytest.raises(TrackdynInputError, match="max_steps = 1"):
+        predict(uniform, [LOADED], LAW, options(max_steps=1))  # two snapshot intervals
 
 
 def level(features=()):

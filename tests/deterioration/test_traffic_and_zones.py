@@ -90,13 +90,14 @@ def test_power_law_on_uniform_track_is_the_equivalent_cycle_closed_form(level):
 
 
 def test_the_first_step_is_one_train(level):
-    """The first step is ``min_step_passages`` passages of the mix (one train), though the
-    shipped power law settles 1.4 mm in it, more than the 0.5 mm step limit (before: about
-    3 passages, the limit reached within the first cycles)."""
+    """The first step is at least ``min_step_passages`` passages of the mix (one train),
+    though the shipped power law settles 1.4 mm in it, more than the 0.5 mm step limit
+    (before: about 3 passages, the limit reached within the first cycles). On level track
+    the settlement keeps its shape (even), so the step runs on to the first snapshot."""
     mix = [wagon(26.0, PASSAGES), wagon(5.0, PASSAGES)]
     ds = predict(level, mix, load_law("power"), options(min_step_passages=100.0))
     length = (ds.step_end - ds.step_start).values
-    assert length[0] == pytest.approx(100.0 / (2 * PASSAGES), rel=1e-12)
+    assert length[0] >= 100.0 / (2 * PASSAGES)
     assert float(ds.step_max_settlement[0]) > 0.5e-3
 
 

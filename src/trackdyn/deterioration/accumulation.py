@@ -94,6 +94,12 @@ class Hardening:
         self.N = self.N + self._cycles * dm
         return split
 
+    def restart(self, held, kept: float) -> None:
+        """Cut the law's memory at the rail seats ``held`` (bool, per rail and sleeper) to
+        the fraction ``kept`` [-] (after tamping: the early, fast phase comes again); ``N``
+        still counts every cycle."""
+        self.states = [np.where(held, kept * s, s) for s in self.states]
+
 
 class LoadHistory(Hardening):
     """Memory of the Varandas law: the load histogram ``h(F)`` per rail and sleeper.
@@ -152,6 +158,9 @@ class LoadHistory(Hardening):
         self.h = self.h + self._rate * dm
         return split
 
+    def restart(self, held, kept: float) -> None:
+        self.h = np.where(np.asarray(held)[..., None], kept * self.h, self.h)
+
 
 def memory(law, shape, vehicles: int) -> Hardening:
     """The accumulator for ``law``: `LoadHistory` for the Varandas law, else `Hardening`."""
@@ -197,3 +206,8 @@ class Zoned:
     def advance(self, dm: float) -> np.ndarray:
         """See `Hardening.advance`."""
         return self._join(((i, acc.advance(dm)) for i, acc in self.parts), (self.vehicles,))
+
+    def restart(self, held, kept: float) -> None:
+        """See `Hardening.restart`."""
+        for i, acc in self.parts:
+            acc.restart(np.asarray(held)[:, i], kept)

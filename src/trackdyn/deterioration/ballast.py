@@ -169,7 +169,7 @@ class Ballast:
         spacing = np.gradient(pos)
         weight = (rail.mass * spacing + sleeper_mass) * GRAVITY
         kd = lin.support_stiffness(rail.EI)
-        self.position, self.delta = pos, lin.delta
+        self.position, self.delta, self.weight = pos, lin.delta, weight
         self.beams = [RailBeam(pos, kd[r], weight, rail.EI, half) for r in range(len(RAILS))]
         self.windows = [Windows(b) for b in self.beams]
         void = excess_gap(lin.seating_gap())
@@ -198,10 +198,30 @@ class Ballast:
         rails = zip(self.beams, gap, start, strict=True)
         return BallastState(tuple(rest_state(b, g, c) for b, g, c in rails))
 
-    def geometry(self, measured: Geometry, state: BallastState) -> Geometry:
-        """Unloaded space curve: measured plus the change of the rails' rest deflection."""
+    def tamp(self, level, state: BallastState, held, change) -> None:
+        """Lift the sleepers ``held`` (2, n) bool with the rail by ``-change`` and pack the
+        ballast under them (tamping, `trackdyn.deterioration.maintenance`).
+
+        Parameters
+        ----------
+        level : ndarray
+            Settlement of the ballast, (2, n) [m].
+        state : BallastState
+            The rest state before tamping.
+        held : ndarray
+            Tamped sleepers, (2, n) bool.
+        change : ndarray
+            Change of the rail's profile at each sleeper, (2, n) [m], positive down.
+        """
+        seated = state.deflection + change - self.weight / self.stiffness  # bears its weight
+        self.void = np.where(held, seated - np.asarray(level), self.void)
+
+    def geometry(self, measured: Geometry, state: BallastState, sign: float = 1.0) -> Geometry:
+        """Unloaded space curve: measured plus the change of the rails' rest deflection
+        (``sign = -1``: the measured-equivalent curve that gives ``measured`` at ``state``,
+        the reference a tamped track continues from)."""
         g = measured
-        change = state.deflection - self.initial.deflection
+        change = sign * (state.deflection - self.initial.deflection)
         left, right = (np.interp(g.distance, self.position, c) for c in change)
         return Geometry(g.distance, g.left + left, g.right + right, g.where)
 

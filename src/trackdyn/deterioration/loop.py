@@ -17,10 +17,15 @@ cycle adds settlement; each vehicle's part is recorded). Zones
 
 Two step sizes. A step (a vehicle run) is as long as ``max_step_settlement`` allows: with
 the loads of the step start, the increment is known in closed form for any ``ΔM``, so the
-step is the largest one within the limit (found by root finding), cut to land on the
-snapshot tonnages and on ``total_mgt``; the first is at least one train
-(``min_step_passages`` passages of the traffic mix) unless that train alone would settle a
-sleeper by more than `TRAIN_ALLOWANCE` times the limit. Within a step, the dynamic wheel loads of
+step is the largest one whose change of the track's shape stays within the limit at
+every sleeper (found by root finding). The shape is what the vehicle feels: the
+increment less its moving mean over `SHAPE_WAVELENGTH` (a track that settles evenly over
+a wavelength longer than the D1 band's loads the wheels as before; the rail beam still
+redistributes the rail-seat loads within the step). The step is cut to land on the
+snapshot tonnages and on ``total_mgt``; the first, and the first after each tamping, is
+at least one train (``min_step_passages`` passages of the traffic mix): the law's first
+cycles settle fast, and a step shorter than a train would follow them with vehicle runs
+where the rail-seat load updates do. Within a step, the dynamic wheel loads of
 the run stay and the rail beam redistributes them as the ballast settles: the rail-seat
 loads are updated as often as each sleeper's stable step (`stable_settlement`) needs.
 A law that follows the load steeply, a soft spot or the first train after tamping then
@@ -55,11 +60,13 @@ from dataclasses import dataclass
 
 import numpy as np
 from pydantic import ConfigDict
+from scipy.ndimage import uniform_filter1d
 from scipy.optimize import brentq
 
 from trackdyn.deterioration.accumulation import Zoned
 from trackdyn.deterioration.ballast import Ballast, rate_field
 from trackdyn.deterioration.loads import TrafficRun, rail_seat_loads, vehicle_runs
+from trackdyn.deterioration.maintenance import Maintenance, MaintenanceOptions
 from trackdyn.deterioration.results import d1_sd, make_dataset
 from trackdyn.deterioration.starts import STARTS, surveyed_geometry, tamped_geometry
 from trackdyn.deterioration.zones import check_zones
@@ -107,8 +114,9 @@ class LoopOptions(Strict):
     total_mgt : float
         Traffic to predict over [MGT].
     max_step_settlement : float
-        Largest settlement of any sleeper in one step [m]; a sleeper's stable step
-        (`stable_settlement`) may keep it lower.
+        Largest change of the settlement's shape (less its moving mean over
+        `SHAPE_WAVELENGTH`) of any sleeper in one step [m]; a sleeper's stable step
+        (`stable_settlement`) may keep the load updates within it shorter.
     snapshot_every_mgt : float
         Tonnage between stored geometry snapshots [MGT].
     threshold_sd_mm : float
@@ -146,7 +154,11 @@ class LoopOptions(Strict):
         [MGT]; those beyond ``total_mgt`` are ignored.
     min_step_passages : float
         Shortest first step, in passages of the traffic mix [-]: one train; default 100
-        (illustrative: a coal train of 100 wagons; the Richards Bay line runs 200).
+        (illustrative: a coal train of 100 wagons; the Richards Bay line runs 200). The
+        first step after a tamping too.
+    maintenance : MaintenanceOptions, optional
+        Tamp over the horizon (`trackdyn.deterioration.maintenance`); None: no maintenance,
+        the loop only reports when each segment reaches the threshold.
     """
 
     model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
@@ -167,6 +179,7 @@ class LoopOptions(Strict):
     start: str = "as measured"
     snapshot_mgt: tuple[float, ...] = ()
     min_step_passages: float = 100.0
+    maintenance: MaintenanceOptions | None = None
 
 
 STABLE_GAIN = 1.0
@@ -196,10 +209,18 @@ def stable_settlement(peak, stiffness, sensitivity: float) -> np.ndarray:
                      where=(gain > 0) & (peak > 0))  # fmt: skip
 
 
-TRAIN_ALLOWANCE = 10.0
-"""How far one train may exceed ``max_step_settlement`` before the loop re-runs the vehicles
-within it [-]: a train that settles a sleeper 10 times the limit (5 mm by default)
-changes its own wheel loads too much to keep them over the train."""
+SHAPE_WAVELENGTH = 25.0
+"""Length of the moving mean taken off a step's settlement before the step limit [m]: the
+longest wavelength of the D1 band (EN 13848-1), which sets the dynamic wheel loads."""
+
+
+def shape_change(increment, position) -> np.ndarray:
+    """The settlement increment (rail, sleeper) [m] less its moving mean over
+    `SHAPE_WAVELENGTH`, in absolute value [m]."""
+    spacing = float(np.median(np.diff(position)))
+    size = max(1, int(round(SHAPE_WAVELENGTH / spacing)) | 1)
+    return np.abs(increment - uniform_filter1d(increment, size, axis=-1, mode="nearest"))
+
 
 RUNAWAY_STEPS = 10
 """Steps in a row, each shorter than one passage of the traffic, after which the loop
@@ -270,7 +291,7 @@ def predict(track: Track, traffic, law, options=None, *, zones=(), progress=Fals
             f"segment_length_m = {o.segment_length:g} m is longer than the track "
             f"({length:g} m); the D1 SD needs at least one whole segment"
         )
-    d1_sd(track.geometry, track.extent, o.segment_length)  # refuses too short a section now
+    _, seg_start, seg_end = d1_sd(track.geometry, track.extent, o.segment_length)
     if o.start not in STARTS:
         raise TrackdynInputError(f"start must be one of {', '.join(STARTS)}; got {o.start!r}")
     seated = o.start == "tamped"
@@ -305,6 +326,13 @@ def predict(track: Track, traffic, law, options=None, *, zones=(), progress=Fals
     state = ballast.initial
     timing["beam"] += time.perf_counter() - clock
     acc = Zoned(laws, shape, len(traffic))
+    maint = (
+        None
+        if o.maintenance is None or per_mgt == 0
+        else Maintenance(o.maintenance, pos, seg_start, seg_end, o.threshold_sd_mm)
+    )
+    wear = maint.factor if maint is not None else (lambda dm: 1.0)
+    reference, fresh = track.geometry, 0.0  # tonnage of the last (re)start [MGT]
     by_vehicle = np.zeros((len(traffic), *shape))
     extra = [float(m) for m in o.snapshot_mgt if 0.0 < m < total]
     snap_at = np.unique(np.concatenate([np.arange(0.0, total, every), extra, [total]]))
@@ -324,7 +352,7 @@ def predict(track: Track, traffic, law, options=None, *, zones=(), progress=Fals
             if per_mgt > 0 and lengths.size == RUNAWAY_STEPS and np.all(lengths * per_mgt < 1):
                 raise TrackdynInputError(
                     f"settlement runs away at {mgt:.3g} MGT: {RUNAWAY_STEPS} steps in a row "
-                    f"shorter than one passage each settled a sleeper by max_step_settlement; "
+                    f"shorter than one passage each changed the shape by max_step_settlement; "
                     "check the settlement law's parameters"
                 )
             clock = time.perf_counter()
@@ -333,6 +361,8 @@ def predict(track: Track, traffic, law, options=None, *, zones=(), progress=Fals
             step_lins = [current[run.lin.static_load] for run in runs]
             solved = vehicle_runs(runs, step_lins, timing)
             target = snap_at[np.searchsorted(snap_at, mgt, side="right")]
+            if maint is not None:
+                target = min(target, maint.next_due(mgt))
             start_level, span, moved, updates = level, None, 0.0, 0
             while span is None or span - moved > 1e-12 * span:
                 if updates >= MAX_LOAD_UPDATES:
@@ -343,23 +373,29 @@ def predict(track: Track, traffic, law, options=None, *, zones=(), progress=Fals
                     )
                 loads = rail_seat_loads(runs, solved, ballast, state, timing)
                 cycles, peak = _cycles(runs, step_lins, loads, shape)
-                settle = _scaled(rate, acc.prepare(cycles))
+                settle = _scaled(rate, acc.prepare(cycles), wear)
                 if span is None:  # the accuracy limit, and at least one train
-                    span = step_size(settle, target - mgt, limit)
+                    span = step_size(lambda dm, f=settle: shape_change(f(dm), pos),
+                                     target - mgt, limit)  # fmt: skip
                     train = min(shortest, target - mgt)
-                    if mgt == 0.0 and span < train:
-                        span = step_size(settle, train, TRAIN_ALLOWANCE * limit)
+                    if mgt == fresh:
+                        span = max(span, train)
+                    if maint is not None:
+                        span = maint.until_due(mgt, settle, geometry, track.extent,
+                                               o.segment_length, span)  # fmt: skip
                     step_peak = peak
                 stable = stable_settlement(peak, ballast.stiffness, sensitivity)
                 dm = step_size(settle, span - moved, stable)
                 level = level + settle(dm)
-                by_vehicle += rate * acc.advance(dm)
+                by_vehicle += rate * wear(dm) * acc.advance(dm)
+                if maint is not None:
+                    maint.advance(dm)
                 moved, updates = moved + dm, updates + 1
                 clock = time.perf_counter()
                 state = ballast.state(level, state)
                 timing["beam"] += time.perf_counter() - clock
             clock = time.perf_counter()
-            geometry = ballast.geometry(track.geometry, state)
+            geometry = ballast.geometry(reference, state)
             timing["beam"] += time.perf_counter() - clock
             steps["start"].append(mgt)
             mgt = target if target - (mgt + span) <= 1e-12 * total else mgt + span
@@ -370,10 +406,25 @@ def predict(track: Track, traffic, law, options=None, *, zones=(), progress=Fals
             for key, value in (("mgt", mgt), ("settlement", level), ("geometry", geometry),
                                ("hanging_gap", state.hanging_gap)):  # fmt: skip
                 history[key].append(value)
+            if maint is not None and mgt < total:
+                due = maint.due(mgt, d1_sd(geometry, track.extent, o.segment_length)[0])
+                if due.size:
+                    clock = time.perf_counter()
+                    tamped, held = maint.tamp(mgt, due, geometry, track.extent,
+                                              o.segment_length)  # fmt: skip
+                    change = [np.interp(pos, geometry.distance, tamped.profile(r) -
+                                        geometry.profile(r)) for r in RAILS]  # fmt: skip
+                    ballast.tamp(level, state, held, np.array(change))
+                    geometry = tamped
+                    acc.restart(held, o.maintenance.memory_kept)
+                    state = ballast.state(level, state)
+                    reference = ballast.geometry(geometry, state, sign=-1.0)
+                    fresh = mgt
+                    timing["beam"] += time.perf_counter() - clock
             bar.update(mgt)
     timing["total"] = time.perf_counter() - t0
     record = {"cycles": acc.N, "rate": rate, "by_vehicle": by_vehicle,
-              "kind": _kinds(zones, pos)}  # fmt: skip
+              "kind": _kinds(zones, pos), "interventions": maint.done if maint else []}  # fmt: skip
     return make_dataset(track, history, steps, snap_at, record, timing, traffic, law, o)
 
 
@@ -387,9 +438,10 @@ def _cycles(runs, lins, loads, shape):
     return cycles, peak
 
 
-def _scaled(rate, increment):
-    """The settlement increment [m] against the step [MGT], times the rate field."""
-    return lambda dm: rate * increment(dm)
+def _scaled(rate, increment, wear):
+    """The settlement increment [m] against the step [MGT], times the rate field and the
+    ballast's wear by tamping (`Maintenance.factor`)."""
+    return lambda dm: rate * wear(dm) * increment(dm)
 
 
 def _zone_laws(law, zones, position) -> list:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+import pandas as pd
 import xarray as xr
 
 from trackdyn.track.quality import longitudinal_level, segment_sd
@@ -85,7 +86,13 @@ def make_dataset(track, history, steps, snap_at, record, timing, traffic, law,
     snapshot tonnages; ``load_cycles`` (rail, sleeper) [-], cycles applied in total;
     per step: ``step_start``, ``step_end`` [MGT], ``step_max_settlement`` [m],
     ``step_load_updates``, the rail-seat load updates within it, and
-    ``peak_rail_seat_load`` (step, rail, sleeper) [N], the largest load at its start.
+    ``peak_rail_seat_load`` (step, rail, sleeper) [N], the largest load at its start;
+    per intervention of the maintenance (`trackdyn.deterioration.maintenance`):
+    ``intervention_mgt`` [MGT], ``intervention_segment``, ``intervention_kind`` (tamping or
+    renewal), ``d1_sd_before`` and ``d1_sd_after`` (intervention, rail) [mm] and
+    ``intervention_lift`` [m], the mean lift; ``interventions`` (segment), how many each
+    segment had. With maintenance, the state stored at a tonnage is the one before any
+    tamping at that tonnage.
 
     Parameters
     ----------
@@ -103,7 +110,7 @@ def make_dataset(track, history, steps, snap_at, record, timing, traffic, law,
         ``cycles``, load cycles applied per rail and sleeper [-]; ``rate``, the
         settlement-rate factor per rail and sleeper [-]; ``by_vehicle``, each vehicle's
         part of the settlement (vehicle, rail, sleeper) [m]; ``kind``, the zone kind per
-        sleeper.
+        sleeper; ``interventions``, the `Intervention` list of the maintenance.
     timing : dict
         Seconds spent in ``vehicle`` runs, ``beam`` solves and in ``total``.
     traffic : sequence of Traffic
@@ -124,6 +131,11 @@ def make_dataset(track, history, steps, snap_at, record, timing, traffic, law,
     g0 = track.geometry
     profiles = np.array([[history["geometry"][k].profile(r) for r in RAILS] for k in snap_index])
     n_steps = len(steps["start"])
+    done = record["interventions"]
+    kinds = np.array([i.kind for i in done], dtype=str)
+    segment_of = np.array([i.segment for i in done], dtype=int)
+    before = np.array([i.sd_before for i in done]).reshape(len(done), len(RAILS))
+    after = np.array([i.sd_after for i in done]).reshape(len(done), len(RAILS))
     peak = np.array(steps["peak_load"]).reshape(n_steps, len(RAILS), pos.size)
     ds = xr.Dataset(
         {
@@ -144,7 +156,7 @@ def make_dataset(track, history, steps, snap_at, record, timing, traffic, law,
             ),
             "trigger_mgt_any_rail": (
                 "segment",
-                trigger.min(axis=0),
+                np.minimum(trigger.min(axis=0), _first(done, starts.size)),
                 {"units": "MGT", "long_name": "first tonnage at which either rail triggers"},
             ),
             "profile": (
@@ -178,6 +190,33 @@ def make_dataset(track, history, steps, snap_at, record, timing, traffic, law,
                 },
             ),
             "load_cycles": (("rail", "sleeper"), record["cycles"], {"units": "1"}),
+            "intervention_mgt": (
+                "intervention",
+                np.array([i.mgt for i in done], dtype=float),
+                {"units": "MGT", "long_name": "tonnage of the tamping or renewal"},
+            ),
+            "intervention_segment": ("intervention", segment_of, {"long_name": "segment"}),
+            "intervention_kind": ("intervention", kinds, {"long_name": "tamping or renewal"}),
+            "d1_sd_before": (
+                ("intervention", "rail"),
+                before,
+                {"units": "mm", "long_name": "D1 SD of the segment before the intervention"},
+            ),
+            "d1_sd_after": (
+                ("intervention", "rail"),
+                after,
+                {"units": "mm", "long_name": "D1 SD of the segment after the intervention"},
+            ),
+            "intervention_lift": (
+                "intervention",
+                np.array([i.lift for i in done], dtype=float),
+                {"units": "m", "long_name": "mean lift of the segment's sleepers"},
+            ),
+            "interventions": (
+                "segment",
+                np.bincount(segment_of, minlength=starts.size),
+                {"units": "1", "long_name": "tampings and renewals of the segment"},
+            ),
             "step_start": ("step", np.array(steps["start"]), {"units": "MGT"}),
             "step_end": ("step", np.array(steps["end"]), {"units": "MGT"}),
             "step_max_settlement": (
@@ -209,6 +248,7 @@ def make_dataset(track, history, steps, snap_at, record, timing, traffic, law,
         attrs={
             "settlement_law": type(law).__name__,
             "settlement_parameters_SI": repr(dataclasses.asdict(law)),
+            "passages_per_mgt": ";".join(f"{t.passages_per_mgt:.17g}" for t in traffic),
             "traffic": "; ".join(
                 f"{t.label or t.vehicle.name} at {t.speed * 3.6:g} km/h, "
                 f"{t.passages_per_mgt:g} passages/MGT"
@@ -232,9 +272,72 @@ def make_dataset(track, history, steps, snap_at, record, timing, traffic, law,
     return ds
 
 
+def _first(done, segments: int) -> np.ndarray:
+    """Tonnage of each segment's first intervention [MGT] (inf: none): with maintenance a
+    segment is due within `trackdyn.deterioration.maintenance.DUE_MARGIN` of the
+    threshold, which the stored states may not show."""
+    first = np.full(segments, np.inf)
+    for i in done[::-1]:
+        first[i.segment] = i.mgt
+    return first
+
+
 def _flat_options(options) -> dict:
     """Loop options with the run options spelled out as ``run_<name>``."""
     flat = {name: getattr(options, name) for name in type(options).model_fields}
-    run = flat.pop("run")
+    run, maintenance = flat.pop("run"), flat.pop("maintenance")
     flat.update({f"run_{k}": v for k, v in run.model_dump().items()})
+    if maintenance is not None:
+        flat.update({f"maintenance_{k}": v for k, v in maintenance.model_dump().items()})
     return {k: str(v) if isinstance(v, bool) else v for k, v in flat.items()}
+
+
+def vehicle_shares(ds) -> pd.DataFrame:
+    """Each vehicle's share of a section's settlement and of its D1-band unevenness.
+
+    The settlement is the sum of each vehicle's part (`settlement_by_vehicle`, from the
+    equivalent cycles of the law, `trackdyn.deterioration.accumulation`), so its shares
+    add up to 1. The unevenness that D1 SD measures is not a sum; its variance is split by
+    covariance, ``share_v = Σ_r cov(D1(e_v), D1(e)) / Σ_r var(D1(e))`` over the rails ``r``,
+    with ``e_v`` the vehicle's settlement and ``D1`` the D1 band (EN 13848-1) along the
+    sleepers: shares that add up to 1, NaN where the settlement is even.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Result of `trackdyn.deterioration.predict`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Per vehicle: ``passages_per_mgt``, ``settlement_share``,
+        ``settlement_mm_per_mgt`` (mean over the rail seats),
+        ``settlement_share_per_1000_passages``, ``d1_variance_share``.
+    """
+    pos = ds.sleeper_distance.values
+    parts = ds.settlement_by_vehicle.values  # (vehicle, rail, sleeper) [m]
+    total = parts.sum(axis=0)
+    level = [[longitudinal_level(pos, p[r], "D1") for r in range(p.shape[0])] for p in parts]
+    level = np.array(level)
+    whole = level.sum(axis=0)
+    variance = float(np.sum(whole * whole))
+    mean_total = float(total.mean())
+    passages = [float(p) for p in ds.attrs["passages_per_mgt"].split(";") if p]
+    mgt = float(ds.mgt[-1])
+    rows = []
+    for v, name in enumerate(ds.vehicle.values):
+        share = float(parts[v].mean()) / mean_total if mean_total > 0 else 0.0
+        cov = float(np.sum(level[v] * whole))
+        rows.append(
+            {
+                "vehicle": str(name),
+                "passages_per_mgt": passages[v],
+                "settlement_share": share,
+                "settlement_mm_per_mgt": float(parts[v].mean()) * 1e3 / mgt,
+                "settlement_share_per_1000_passages": (
+                    share / (passages[v] * mgt) * 1e3 if passages[v] > 0 else 0.0
+                ),
+                "d1_variance_share": cov / variance if variance > 0 else np.nan,
+            }
+        )
+    return pd.DataFrame(rows)

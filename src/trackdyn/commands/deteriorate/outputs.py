@@ -9,8 +9,17 @@ from trackdyn.commands.deteriorate.plots import (
     geometry_evolution,
     quality_evolution,
     settlement_map,
+    straight_line_diagram,
 )
+from trackdyn.deterioration.results import vehicle_shares
 from trackdyn.io import write_netcdf
+
+
+def _shares(ds) -> pd.DataFrame:
+    """`vehicle_shares` of a section, with its name."""
+    frame = vehicle_shares(ds)
+    frame.insert(0, "section", ds.attrs["section"])
+    return frame
 
 
 def summary(datasets) -> pd.DataFrame:
@@ -36,6 +45,7 @@ def summary(datasets) -> pd.DataFrame:
                 "d1_sd_max_initial_mm": float(ds.d1_sd.isel(mgt=0).max()),
                 "d1_sd_max_final_mm": float(ds.d1_sd.isel(mgt=-1).max()),
                 "first_trigger_mgt": float(np.min(trigger)) if trigger.size else np.inf,
+                "interventions": int(ds.sizes["intervention"]),
             }
         )
     return pd.DataFrame(rows)
@@ -101,6 +111,63 @@ def maintenance_table(ds) -> pd.DataFrame:
     return frame
 
 
+def interventions_table(ds) -> pd.DataFrame:
+    """Every tamping and renewal: tonnage [MGT], segment, D1 SD before and after per rail
+    [mm], mean lift [mm].
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Result of `trackdyn.deterioration.predict` with a ``section`` attribute.
+    """
+    seg = ds.intervention_segment.values
+    frame = pd.DataFrame(
+        {
+            "section": ds.attrs["section"],
+            "mgt": ds.intervention_mgt.values,
+            "segment_start_m": ds.segment_start.values[seg],
+            "segment_end_m": ds.segment_end.values[seg],
+            "kind": ds.intervention_kind.values.astype(str),
+        }
+    )
+    for when in ("before", "after"):
+        for rail in ds.rail.values:
+            frame[f"d1_sd_{rail}_{when}_mm"] = ds[f"d1_sd_{when}"].sel(rail=rail).values
+    frame["mean_lift_mm"] = ds.intervention_lift.values * 1e3
+    return frame
+
+
+def life_cycle_table(ds) -> pd.DataFrame:
+    """Per segment: zone kinds, interventions, mean interval [MGT] and tamped length per
+    100 MGT [m] over the horizon.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Result of `trackdyn.deterioration.predict` with a ``section`` attribute.
+    """
+    horizon = float(ds.mgt[-1])
+    x, kinds = ds.sleeper_distance.values, ds.zone_kind.values.astype(str)
+    rows = []
+    for j in range(ds.sizes["segment"]):
+        lo, hi = float(ds.segment_start[j]), float(ds.segment_end[j])
+        at = np.sort(ds.intervention_mgt.values[ds.intervention_segment.values == j])
+        inside = (x >= lo) & (x <= hi)
+        rows.append(
+            {
+                "section": ds.attrs["section"],
+                "segment_start_m": lo,
+                "segment_end_m": hi,
+                "zone_kinds": " ".join(sorted(set(kinds[inside]))),
+                "interventions": at.size,
+                "first_mgt": at[0] if at.size else np.nan,
+                "mean_interval_mgt": float(np.diff(at).mean()) if at.size > 1 else np.nan,
+                "tamped_m_per_100_mgt": at.size * (hi - lo) / horizon * 100.0,
+            }
+        )
+    return pd.DataFrame(rows)
+
+
 def steps_table(ds) -> pd.DataFrame:
     """Tonnage steps taken: start, end [MGT] and largest settlement [mm].
 
@@ -124,8 +191,12 @@ def write_outputs(datasets, folder) -> list[str]:
     """Write every file of a prediction into ``folder``; return the file names.
 
     Per section ``<name>``: ``deterioration_<name>.nc``, ``settlement_<name>.csv`` and the
-    figures ``<name>_geometry.png``, ``<name>_quality.png``, ``<name>_settlement_map.png``;
-    for all sections: ``summary.csv``, ``quality.csv``, ``maintenance.csv``, ``steps.csv``.
+    figures ``<name>_geometry.png``, ``<name>_quality.png`` (the life cycle: D1 SD per
+    segment with the tampings), ``<name>_settlement_map.png``, ``<name>_straight_line.png``
+    (segments along the chainage against tonnage); for all sections: ``summary.csv``,
+    ``quality.csv``, ``maintenance.csv`` (first triggers), ``steps.csv``,
+    ``vehicle_shares.csv`` and, with maintenance, ``interventions.csv`` and
+    ``life_cycle.csv``.
 
     Parameters
     ----------
@@ -150,14 +221,19 @@ def write_outputs(datasets, folder) -> list[str]:
             ("geometry", geometry_evolution),
             ("quality", quality_evolution),
             ("settlement_map", settlement_map),
+            ("straight_line", straight_line_diagram),
         ):
             draw(ds, folder / f"{name}_{kind}.png", title)
             names.append(f"{name}_{kind}.png")
     csv(summary(datasets), "summary.csv")
-    for name, table in (
+    tables = [
         ("quality.csv", quality_table),
         ("maintenance.csv", maintenance_table),
         ("steps.csv", steps_table),
-    ):
+        ("vehicle_shares.csv", _shares),
+    ]
+    if any(ds.attrs.get("option_maintenance_policy") for ds in datasets):
+        tables += [("interventions.csv", interventions_table), ("life_cycle.csv", life_cycle_table)]
+    for name, table in tables:
         csv(pd.concat([table(ds) for ds in datasets], ignore_index=True), name)
     return names

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from trackdyn.commands.plots import RAIL_COLOURS, plt, save
+from trackdyn.deterioration.results import HANGING_GAP
 
 
 def geometry_evolution(ds, path, title: str = "") -> None:
@@ -52,7 +53,8 @@ def geometry_evolution(ds, path, title: str = "") -> None:
 
 
 def quality_evolution(ds, path, title: str = "") -> None:
-    """D1 standard deviation of each 200 m segment against tonnage, with the threshold.
+    """The life cycle: D1 standard deviation of each segment against tonnage, with the
+    threshold and the tampings (a triangle at each, the D1 SD dropping to its value after).
 
     Parameters
     ----------
@@ -64,18 +66,20 @@ def quality_evolution(ds, path, title: str = "") -> None:
         Figure title.
     """
     fig, axes = plt.subplots(1, 2, figsize=(12.5, 4.5), sharey=True)
-    colours = plt.cm.tab10(np.arange(ds.sizes["segment"]) % 10)
+    colours = _segment_colours(ds.sizes["segment"])
     threshold = float(ds.attrs["option_threshold_sd_mm"])
     for ax, rail in zip(axes, ds.rail.values, strict=True):
         for j, colour in enumerate(colours):
             lo, hi = float(ds.segment_start[j]), float(ds.segment_end[j])
+            mgt, sd = _sawtooth(ds, rail, j)
+            ax.plot(mgt, sd, "-", color=colour, lw=1.0, label=f"{lo:g}-{hi:g} m")
+            mine = ds.intervention_segment.values == j
             ax.plot(
-                ds.mgt,
-                ds.d1_sd.sel(rail=rail).isel(segment=j),
-                ".-",
+                ds.intervention_mgt.values[mine],
+                ds.d1_sd_before.sel(rail=rail).values[mine],
+                "v",
                 color=colour,
-                ms=3,
-                label=f"{lo:g}-{hi:g} m",
+                ms=4,
             )
         ax.axhline(threshold, color="k", ls="--", lw=1, label=f"threshold {threshold:g} mm")
         ax.set_title(f"{rail} rail")
@@ -118,3 +122,76 @@ def settlement_map(ds, path, title: str = "") -> None:
     axes[-1].set_xlabel("sleeper position [m]")
     fig.suptitle(title or "Sleeper settlement")
     save(fig, path)
+
+
+def _segment_colours(n: int):
+    """One colour per segment, distinct for up to 20 (tab20), then cycling."""
+    return plt.cm.tab20(np.arange(n) % 20) if n > 10 else plt.cm.tab10(np.arange(n))
+
+
+def _sawtooth(ds, rail, j):
+    """Tonnage [MGT] and D1 SD [mm] of segment ``j`` with a drop at each intervention."""
+    mgt, sd = list(ds.mgt.values), list(ds.d1_sd.sel(rail=rail).isel(segment=j).values)
+    mine = np.flatnonzero(ds.intervention_segment.values == j)
+    for k in mine[::-1]:
+        at = float(ds.intervention_mgt[k])
+        i = int(np.searchsorted(mgt, at, side="right"))
+        mgt.insert(i, at)
+        sd.insert(i, float(ds.d1_sd_after.sel(rail=rail)[k]))
+    return np.array(mgt), np.array(sd)
+
+
+def straight_line_diagram(ds, path, title: str = "") -> None:
+    """Segments along the chainage against tonnage, coloured by the D1 SD (the worse
+    rail), with the tampings, the zones and the hanging sleepers.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Result of `trackdyn.deterioration.predict`.
+    path : path
+        PNG file to write.
+    title : str
+        Figure title.
+    """
+    fig, (top, ax) = plt.subplots(
+        2, 1, figsize=(11, 7), sharex=True, gridspec_kw={"height_ratios": [1, 6]}
+    )
+    threshold = float(ds.attrs["option_threshold_sd_mm"])
+    edges_x = np.append(ds.segment_start.values, ds.segment_end.values[-1])
+    mgt = ds.mgt.values
+    edges_m = np.append(mgt, mgt[-1])  # each state holds until the next
+    worse = ds.d1_sd.max("rail").values  # (mgt, segment)
+    mesh = ax.pcolormesh(edges_x, edges_m, worse[:, :], shading="flat", cmap="RdYlGn_r",
+                         vmin=0.0, vmax=max(2 * threshold, float(worse.max())))  # fmt: skip
+    bar = fig.colorbar(mesh, ax=[top, ax], label="D1 SD, worse rail [mm]")
+    bar.ax.axhline(threshold, color="k", lw=1.5)
+    mid = 0.5 * (ds.segment_start.values + ds.segment_end.values)
+    seg = ds.intervention_segment.values
+    kinds = ds.intervention_kind.values.astype(str)
+    for kind, marker in (("tamping", "o"), ("renewal", "s")):
+        on = kinds == kind
+        if on.any():
+            ax.plot(mid[seg[on]], ds.intervention_mgt.values[on], marker, ms=5, mfc="white",
+                    mec="k", ls="none", label=kind)  # fmt: skip
+    ax.set_ylabel("accumulated traffic [MGT]")
+    ax.set_xlabel("distance [m]")
+    ax.set_ylim(0.0, float(mgt[-1]))
+    if seg.size:
+        ax.legend(loc="upper left", bbox_to_anchor=(0.0, -0.1), ncol=2, fontsize=8)
+    x = ds.sleeper_distance.values
+    kind = ds.zone_kind.values.astype(str)
+    names = sorted(set(kind))
+    colours = plt.cm.Pastel1(np.arange(len(names)) % 9)
+    for k, name in enumerate(names):
+        top.fill_between(x, 0, 1, where=kind == name, color=colours[k], step="mid", label=name)
+    hanging = ds.hanging_gap.isel(mgt=-1).max("rail").values > HANGING_GAP
+    top.plot(x[hanging], np.full(hanging.sum(), 0.5), "v", color="k", ms=4,
+             label=f"hanging > {HANGING_GAP * 1e3:g} mm at the end")  # fmt: skip
+    top.set_ylim(0, 1)
+    top.set_yticks([])
+    top.set_ylabel("zones", rotation=0, ha="right", va="center")
+    top.legend(loc="lower left", bbox_to_anchor=(0.0, 1.02), ncol=len(names) + 1, fontsize=8)
+    fig.suptitle(title or "Straight-line diagram")
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

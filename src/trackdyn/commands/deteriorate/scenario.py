@@ -34,6 +34,13 @@ segment_length_m = 200
 max_steps = 1000
 min_step_passages = 100         # the first step: one train (illustrative)
 
+[maintenance]                   # omit: no tamping, the loop only reports the triggers
+policy = "threshold"            # tamp a segment when its D1 SD reaches threshold_sd_mm;
+                                # or "fixed" with interval_mgt
+min_interval_mgt = 5            # and every other trackdyn.deterioration.maintenance option
+# horizon_years = 30            # with annual_mgt: the horizon instead of [loop] total_mgt
+# annual_mgt = 10
+
 [track]                         # omit for the built-in example section
 geometry = "geometry.csv"
 supports = "supports.csv"
@@ -62,6 +69,7 @@ from pydantic import (
 )
 
 from trackdyn.deterioration.loop import LoopOptions
+from trackdyn.deterioration.maintenance import MaintenanceOptions
 from trackdyn.errors import TrackdynInputError
 from trackdyn.limits import MAX_SPEED_KMH
 from trackdyn.options import RunOptions, Strict, load_toml, vehicle_source
@@ -159,6 +167,25 @@ class TrackSectionsSpec(Strict):
         return self
 
 
+class MaintenanceSpec(MaintenanceOptions):
+    """``[maintenance]``: the `MaintenanceOptions`, and optionally the horizon as
+    ``horizon_years`` [years] of ``annual_mgt`` [MGT/year] instead of ``[loop] total_mgt``."""
+
+    horizon_years: PositiveFloat | None = None
+    annual_mgt: PositiveFloat | None = None
+
+    @model_validator(mode="after")
+    def _both_or_neither(self):
+        if (self.horizon_years is None) != (self.annual_mgt is None):
+            raise ValueError("give horizon_years and annual_mgt together, or neither")
+        return self
+
+    def options(self) -> MaintenanceOptions:
+        """The maintenance options without the horizon."""
+        fields = self.model_dump(exclude={"horizon_years", "annual_mgt"})
+        return MaintenanceOptions(**fields)
+
+
 MOVED_TO_RUN = ("model", "delta", "dt_s")
 """Top-level keys of earlier scenario files that now belong in ``[run]``."""
 
@@ -171,6 +198,27 @@ class DeteriorationScenario(Strict):
     settlement: SettlementSpec = SettlementSpec()
     loop: LoopSpec = LoopSpec()
     track: TrackSectionsSpec = TrackSectionsSpec()
+    maintenance: MaintenanceSpec | None = None
+
+    @model_validator(mode="after")
+    def _one_horizon(self):
+        m = self.maintenance
+        if (
+            m is not None
+            and m.horizon_years is not None
+            and "total_mgt" in self.loop.model_fields_set
+        ):
+            raise ValueError("give the horizon as [loop] total_mgt or as [maintenance] "
+                             "horizon_years and annual_mgt, not both")  # fmt: skip
+        return self
+
+    @property
+    def horizon_mgt(self) -> float:
+        """Traffic to predict over [MGT]."""
+        m = self.maintenance
+        if m is not None and m.horizon_years is not None:
+            return m.horizon_years * m.annual_mgt
+        return self.loop.total_mgt
 
     @model_validator(mode="before")
     @classmethod
@@ -206,7 +254,7 @@ def loop_options(spec: DeteriorationScenario, seed, example: bool = False):
     """
     lp = spec.loop
     return LoopOptions(
-        total_mgt=lp.total_mgt,
+        total_mgt=spec.horizon_mgt,
         max_step_settlement=lp.max_step_settlement_mm * 1e-3,
         snapshot_every_mgt=lp.snapshot_every_mgt,
         threshold_sd_mm=lp.threshold_sd_mm,
@@ -219,6 +267,7 @@ def loop_options(spec: DeteriorationScenario, seed, example: bool = False):
         run=spec.run,
         rail=spec.track.rail,
         start=spec.track.start or ("tamped" if example else "as measured"),
+        maintenance=None if spec.maintenance is None else spec.maintenance.options(),
     )
 
 

@@ -1,0 +1,374 @@
+"""Tamping over a track's life: when and where the loop tamps, and what tamping does.
+
+The deterioration loop (`trackdyn.deterioration.loop`) goes on to its horizon; at the end
+of every step the policy looks at the D1 standard deviation of each segment and tamps
+those that are due:
+
+- ``policy = "threshold"``: a segment whose D1 SD reaches the loop's
+  ``threshold_sd_mm`` on either rail, at least ``min_interval_mgt`` after its last
+  tamping; ``neighbours`` segments each side are tamped with it (the stretch around it);
+- ``policy = "fixed"``: every segment every ``interval_mgt``.
+
+A segment tamped ``max_tampings`` times gets its ballast renewed at the next
+intervention instead (the damage of the tampings is undone; the geometry is restored as
+by a tamping). A section with no traffic is never tamped.
+
+What a tamping does, over the tamped stretch (whole segments, the machine running in and
+out over ``run_out_m`` inside it, so the track outside is not touched):
+
+1. **Geometry.** The D1 band of each rail (EN 13848-1, 3-25 m) is replaced by
+   ``D1' = ρ k D1 + sqrt(1 - ρ²) σ' ε``: the part of the old shape the track keeps
+   (correlation ``ρ = kept_correlation`` with the old shape; ``k = σ'/σ``) and new
+   irregularity from the tamping itself (``ε`` a D1-band random profile of unit standard
+   deviation), so that the standard deviation after tamping is
+   ``σ' = recovery_offset_mm + recovery_slope σ``, the linear form of the recovery
+   relations reviewed by Audley & Andrews (2013): bad track improves a lot, good track
+   little, and very good track may come out worse. The longer waves stay.
+2. **Lift.** The rail is lifted to the new profile plus a general lift
+   (``general_lift_mm``) and the ballast packed under every sleeper: no sleeper hangs
+   after tamping (`Ballast.tamp`).
+3. **Settlement after tamping.** The settlement law's memory at the tamped sleepers is
+   cut to ``memory_kept`` (its equivalent cycles, consolidation or load history: the
+   early, fast phase comes again, `trackdyn.deterioration.accumulation`), and the lifted
+   ballast is loose: its
+   settlement rate is multiplied by ``1 + (lift / lift_reference_mm) exp(-ΔM /
+   loosening_mgt)`` (``ΔM`` the tonnage since the tamping), so the track settles back
+   more where it was lifted more, towards its old shape (Nakamura et al., 2025).
+4. **Ballast damage.** Each tamping multiplies the settlement rate of the tamped sleepers
+   by ``1 + damage_per_tamping`` (broken and rounded stones, fines): the intervals between
+   tampings shrink (Abadi et al., 2016).
+
+Every default is illustrative (set so that the built-in example shows a life of a few
+tampings per segment, not from measurement): a railway sets its own from its records.
+
+References
+----------
+Audley, M., Andrews, J.D. (2013). The effects of tamping on railway track geometry
+degradation. Proceedings of the IMechE, Part F: Journal of Rail and Rapid Transit 227(4),
+376-391.
+
+Nakamura, T. et al. (2025). Journal of JSCE, Intelligence, Informatics and Infrastructure
+4(1), 79-84 (geometry returns towards its pre-tamping shape, with more settlement where
+the lift was larger).
+
+Abadi, T., Le Pen, L., Zervos, A., Powrie, W. (2016). Effect of sleeper interventions on
+railway track performance. Procedia Engineering 143, 999-1006 (tamping damages ballast).
+
+EN 13848-1:2019. Railway applications - Track - Track geometry quality - Part 1:
+Characterisation of track geometry. CEN, Brussels.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Literal
+
+import numpy as np
+from pydantic import (
+    Field,
+    NonNegativeFloat,
+    NonNegativeInt,
+    PositiveFloat,
+    PositiveInt,
+    model_validator,
+)
+from scipy.optimize import brentq
+
+from trackdyn.options import Strict
+from trackdyn.track.quality import longitudinal_level
+from trackdyn.track.track import RAILS
+
+DUE_MARGIN = 0.02
+"""Fraction under the threshold at which a segment counts as due at a step end [-]: the
+step ends where the D1 SD is predicted to reach the threshold (`Maintenance.until_due`),
+and the rail-seat load updates within the step move it a little."""
+
+
+class MaintenanceOptions(Strict):
+    """The ``[maintenance]`` table: policy and tamping model (units in the names).
+
+    Parameters
+    ----------
+    policy : str
+        ``"threshold"``: tamp a segment when its D1 SD reaches the loop's threshold;
+        ``"fixed"``: tamp every segment every ``interval_mgt``.
+    interval_mgt : float, optional
+        Tonnage between tampings of the fixed policy [MGT].
+    min_interval_mgt : float
+        Shortest time between two tampings of a segment [MGT]; default 5, illustrative.
+    neighbours : int
+        Segments each side tamped with a segment that is due [-]; default 0.
+    max_tampings : int
+        Tampings of a segment before its ballast is renewed [-]; default 6, illustrative.
+    recovery_offset_mm, recovery_slope : float
+        D1 SD after tamping ``offset + slope × before`` [mm]; default 0.6 mm and 0.3,
+        illustrative (the linear form reviewed by Audley & Andrews, 2013).
+    kept_correlation : float
+        Correlation of the D1 profile after tamping with the one before [-]; default 0.5,
+        illustrative.
+    run_out_m : float
+        Length over which the machine runs in and out at each end of the tamped stretch
+        [m]; default 10, illustrative.
+    general_lift_mm : float
+        Lift of the lowest point of the stretch [mm]; default 10, illustrative.
+    memory_kept : float
+        Fraction of the settlement law's memory a tamping leaves [-]; default 0.5,
+        illustrative (0: the law starts again as on new track, and the shipped laws, which
+        settle a third of their 50 MGT settlement in the first MGT, then re-create most of
+        the unevenness within the minimum interval).
+    lift_reference_mm : float
+        Lift that doubles the settlement rate just after tamping [mm]; default 40,
+        illustrative.
+    loosening_mgt : float
+        Tonnage over which the loosening of the lifted ballast decays by ``1/e`` [MGT];
+        default 3, illustrative.
+    damage_per_tamping : float
+        Rise of the settlement rate per tamping [-]; default 0.1, illustrative.
+    seed : int
+        Seed of the irregularity each tamping leaves.
+    """
+
+    policy: Literal["threshold", "fixed"] = "threshold"
+    interval_mgt: PositiveFloat | None = None
+    min_interval_mgt: NonNegativeFloat = 5.0
+    neighbours: NonNegativeInt = 0
+    max_tampings: PositiveInt = 6
+    recovery_offset_mm: NonNegativeFloat = 0.6
+    recovery_slope: float = Field(0.3, ge=0.0, le=1.0)
+    kept_correlation: float = Field(0.5, ge=0.0, le=1.0)
+    run_out_m: NonNegativeFloat = 10.0
+    general_lift_mm: NonNegativeFloat = 10.0
+    memory_kept: float = Field(0.5, ge=0.0, le=1.0)
+    lift_reference_mm: PositiveFloat = 40.0
+    loosening_mgt: PositiveFloat = 3.0
+    damage_per_tamping: NonNegativeFloat = 0.1
+    seed: NonNegativeInt = 0
+
+    @model_validator(mode="after")
+    def _interval(self):
+        if self.policy == "fixed" and self.interval_mgt is None:
+            raise ValueError("maintenance policy 'fixed' needs interval_mgt")
+        return self
+
+
+@dataclasses.dataclass
+class Intervention:
+    """One tamping (or renewal) of one segment.
+
+    Parameters
+    ----------
+    mgt : float
+        Tonnage [MGT].
+    segment : int
+        Segment index.
+    kind : str
+        ``"tamping"`` or ``"renewal"``.
+    sd_before, sd_after : ndarray
+        D1 SD of each rail before and after [mm].
+    lift : float
+        Mean lift of the segment's sleepers [m].
+    """
+
+    mgt: float
+    segment: int
+    kind: str
+    sd_before: np.ndarray
+    sd_after: np.ndarray
+    lift: float
+
+
+class Maintenance:
+    """The maintenance state of a section and the tampings it gets.
+
+    Parameters
+    ----------
+    options : MaintenanceOptions
+        Policy and tamping model.
+    position : ndarray
+        Sleeper positions [m].
+    starts, ends : ndarray
+        Segment bounds [m] (`trackdyn.deterioration.results.d1_sd`).
+    threshold : float
+        D1 SD that makes a segment due [mm].
+    """
+
+    def __init__(self, options: MaintenanceOptions, position, starts, ends, threshold: float):
+        self.o, self.position, self.threshold = options, position, threshold
+        self.starts, self.ends = np.asarray(starts), np.asarray(ends)
+        n = self.starts.size
+        self.last = np.full(n, -np.inf)  # tonnage of the last tamping [MGT]
+        self.count = np.zeros(n, dtype=int)  # tampings since the last renewal
+        shape = (len(RAILS), position.size)
+        self.damage = np.ones(shape)  # rate factor of the tampings' ballast damage [-]
+        self.lift = np.zeros(shape)  # lift of the last tamping [m]
+        self.since = np.full(shape, np.inf)  # tonnage since it [MGT]
+        self.done: list[Intervention] = []
+        self.expected: set[int] = set()  # segments a step was cut for (`until_due`)
+        self._last_sd = np.zeros((len(RAILS), n))
+
+    def next_due(self, mgt: float) -> float:
+        """Next tonnage of a fixed-policy tamping after ``mgt`` [MGT] (inf: none)."""
+        if self.o.policy != "fixed":
+            return np.inf
+        step = self.o.interval_mgt
+        return (np.floor(mgt / step + 1e-9) + 1) * step
+
+    def due(self, mgt: float, sd) -> np.ndarray:
+        """Segments to tamp at ``mgt`` given the D1 SD (rail, segment) [mm]."""
+        if self.o.policy == "fixed":
+            hit = np.isclose(mgt, np.round(mgt / self.o.interval_mgt) * self.o.interval_mgt)
+            return np.arange(self.starts.size) if hit and mgt > 0 else np.array([], int)
+        ready = mgt - self.last >= self.o.min_interval_mgt
+        over = np.flatnonzero((np.max(sd, axis=0) >= self.threshold * (1 - DUE_MARGIN)) & ready)
+        over = np.union1d(over, sorted(self.expected)).astype(int)
+        self.expected = set()
+        k = self.o.neighbours
+        near = {j for i in over for j in range(i - k, i + k + 1) if 0 <= j < self.starts.size}
+        return np.array(sorted(near), dtype=int)
+
+    def until_due(self, mgt: float, settle, geometry, extent, segment_length: float,
+                  cap: float) -> float:  # fmt: skip
+        """Traffic until a segment that may be tamped reaches the threshold [MGT], at most
+        ``cap`` (threshold policy; the fixed one lands on its tonnages by `next_due`).
+
+        The rail is taken to follow the settlement increment ``settle(dm)`` [m] at the
+        sleepers; the step ends where the D1 SD so predicted reaches the threshold, so that
+        the tamping comes at its tonnage and not up to a step late. The segment that
+        reaches it is then due at the step end (`due`), whatever the rail-seat load updates
+        within the step did to its D1 SD.
+        """
+        ready = mgt - self.last >= self.o.min_interval_mgt
+        if self.o.policy != "threshold" or not ready.any():
+            return cap
+        from trackdyn.deterioration.results import d1_sd
+
+        x, target = geometry.distance, self.threshold
+
+        def excess(dm):
+            e = settle(dm)
+            moved = {r: geometry.profile(r) + np.interp(x, self.position, e[k])
+                     for k, r in enumerate(RAILS)}  # fmt: skip
+            sd = d1_sd(dataclasses.replace(geometry, **moved), extent, segment_length)[0]
+            self._last_sd = sd
+            return float(np.max(sd[:, ready])) - target
+
+        if excess(cap) <= 0 or excess(0.0) >= 0:
+            return cap
+        dm = brentq(excess, 0.0, cap, xtol=1e-9 * cap, rtol=1e-6)
+        self.expected = {int(np.argmax(np.where(ready, self._last_sd.max(axis=0), -np.inf)))}
+        return dm
+
+    def factor(self, dm: float) -> np.ndarray:
+        """Settlement-rate factor of ballast damage and loosening over a step of ``dm``
+        [MGT] (the loosening averaged over the step), per rail and sleeper [-]."""
+        tau = self.o.loosening_mgt
+        with np.errstate(invalid="ignore"):
+            decay = np.exp(-self.since / tau)
+            mean = decay if dm <= 0 else decay * -np.expm1(-dm / tau) * tau / dm
+        loose = self.lift / (self.o.lift_reference_mm * 1e-3) * np.nan_to_num(mean)
+        return self.damage * (1.0 + loose)
+
+    def advance(self, dm: float) -> None:
+        """Traffic of ``dm`` [MGT] has passed."""
+        self.since = self.since + dm
+
+    def sleepers(self, segments) -> np.ndarray:
+        """Which sleepers the ``segments`` hold, (2, n) bool."""
+        x = self.position
+        held = np.zeros(x.size, dtype=bool)
+        for i in segments:
+            held |= (x >= self.starts[i]) & (x <= self.ends[i])
+        return np.broadcast_to(held, (len(RAILS), x.size))
+
+    def tamp(self, mgt, segments, geometry, extent, segment_length):
+        """Tamp ``segments``: the new geometry, the tamped sleepers and the lift.
+
+        Parameters
+        ----------
+        mgt : float
+            Tonnage [MGT].
+        segments : ndarray
+            Segments due.
+        geometry : Geometry
+            Unloaded space curve before tamping.
+        extent : tuple of float
+            Part of the track assessed [m].
+        segment_length : float
+            Segment length of the D1 SD [m].
+
+        Returns
+        -------
+        geometry : Geometry
+            Unloaded space curve after tamping.
+        held : ndarray
+            Tamped sleepers, (2, n) bool.
+        """
+        from trackdyn.deterioration.results import d1_sd
+
+        before = d1_sd(geometry, extent, segment_length)[0]
+        profiles, lift = {}, np.zeros((len(RAILS), self.position.size))
+        rng = np.random.default_rng((self.o.seed, len(self.done)))
+        runs = _contiguous(segments)
+        for r, rail in enumerate(RAILS):
+            x, z = geometry.distance, geometry.profile(rail).copy()
+            d1 = longitudinal_level(x, z, "D1")
+            noise = longitudinal_level(x, rng.standard_normal(x.size), "D1")
+            for run in runs:
+                a, b = self.starts[run[0]], self.ends[run[-1]]
+                inside = (x >= a) & (x <= b)
+                sd = float(np.sqrt(np.mean(before[r, run] ** 2))) * 1e-3
+                new_sd = self.o.recovery_offset_mm * 1e-3 + self.o.recovery_slope * sd
+                rho = self.o.kept_correlation
+                eps = noise / np.std(noise[inside])
+                kept = rho * (new_sd / sd if sd > 0 else 0.0) * d1
+                target = kept + np.sqrt(1 - rho * rho) * new_sd * eps
+                ends = (run[0] > 0, run[-1] < self.starts.size - 1)  # no run-out at the
+                w = _run_in_out(x, a, b, self.o.run_out_m, ends)  # section's own ends
+                z = z + w * (target - d1)
+                up = np.interp(self.position, x, w * (d1 - target))  # lift [m], up
+                on = (self.position >= a) & (self.position <= b)
+                lift[r, on] = self.o.general_lift_mm * 1e-3 + up[on] - up[on].min()
+            profiles[rail] = z
+        new = dataclasses.replace(geometry, **profiles)
+        after = d1_sd(new, extent, segment_length)[0]
+        held = self.sleepers(segments)
+        renew = np.isin(np.arange(self.starts.size), segments) & (self.count >= self.o.max_tampings)
+        fresh = self.sleepers(np.flatnonzero(renew))
+        worn = self.damage * (1.0 + self.o.damage_per_tamping)
+        self.damage = np.where(fresh, 1.0, np.where(held, worn, self.damage))
+        self.lift = np.where(held, lift, self.lift)
+        self.since = np.where(held, 0.0, self.since)
+        for i in segments:
+            kind = "renewal" if renew[i] else "tamping"
+            self.count[i] = 0 if renew[i] else self.count[i]
+            self.count[i] += 1
+            self.last[i] = mgt
+            mean_lift = float(lift[self.sleepers([i])].mean())
+            self.done.append(Intervention(mgt, int(i), kind, before[:, i], after[:, i], mean_lift))
+        return new, held
+
+
+def _contiguous(segments) -> list[list[int]]:
+    """Runs of adjacent segment indices."""
+    runs: list[list[int]] = []
+    for i in sorted(int(s) for s in segments):
+        if runs and i == runs[-1][-1] + 1:
+            runs[-1].append(i)
+        else:
+            runs.append([i])
+    return runs
+
+
+def _run_in_out(x, a: float, b: float, length: float, ends=(True, True)) -> np.ndarray:
+    """Weight of the tamped profile: 1 inside ``[a, b]`` less cosine ramps of ``length`` at
+    the ends flagged in ``ends`` (start, end), 0 outside [-]."""
+    inside = (x >= a) & (x <= b)
+    if length <= 0:
+        return inside.astype(float)
+    room = np.full(x.shape, np.inf)
+    if ends[0]:
+        room = np.minimum(room, x - a)
+    if ends[1]:
+        room = np.minimum(room, b - x)
+    ramp = np.clip(room / length, 0.0, 1.0)
+    return np.where(inside, 0.5 - 0.5 * np.cos(np.pi * ramp), 0.0)
