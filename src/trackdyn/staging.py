@@ -3,7 +3,11 @@
 A command writes into a hidden staging folder inside its output folder; only when every
 file is written are they moved into place, replacing the files of the command's previous
 run there. A manifest (`MANIFEST`) names the command and its files, so a folder holding
-another command's outputs is refused unless ``overwrite`` is given.
+another command's outputs is refused unless ``overwrite`` is given. With a `Record` the
+folder also gets `SUMMARY` (``summary.json``): the trackdyn version, the command line, the
+options, the inputs with their SHA-256, the headline figures, how long the run took and the
+files; netCDF files written into the folder take their provenance from the same record
+(`trackdyn.netcdf`).
 
 An interrupt (Ctrl-C, SIGTERM) ends the process at once with exit code 130: staging
 folders and output folders this process created are removed, child processes (local Dask
@@ -14,12 +18,16 @@ left by a process killed outright (SIGKILL) is removed by the next command writi
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import shutil
 import signal
+import sys
 import tempfile
+import time
 from contextlib import contextmanager
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from trackdyn.errors import TrackdynInputError
@@ -27,11 +35,91 @@ from trackdyn.errors import TrackdynInputError
 MANIFEST = ".trackdyn.json"
 """File in an output folder naming the command that wrote it and its files."""
 
+SUMMARY = "summary.json"
+"""File in an output folder describing the run (with a `Record`)."""
+
 EXIT_INTERRUPTED = 130
 """Exit code after an interrupt (128 + SIGINT), as shells report it."""
 
 _cleanup: list[Path] = []  # staging folders and created output folders, newest last
 _state = {"committing": False, "pending": False}
+_records: dict[Path, Record] = {}  # staging folder -> the record of its run
+
+
+@dataclass
+class Record:
+    """What a command ran on and found: written to ``summary.json`` and the netCDF files.
+
+    Parameters
+    ----------
+    title : str
+        One line saying what the outputs are.
+    inputs : dict
+        Input files by role (``scenario``, ``geometry``, ...); None for the built-in example.
+    options : dict
+        The options the command ran with (flat, values numbers or text).
+    vehicle : dict
+        Vehicle parameters by name [SI units], where a vehicle was run.
+    headline : dict
+        The main results (filled by the command before its folder is committed), names with
+        their units (``dyn_load_max_kN``).
+    timings : dict
+        How long parts of the run took [s]; kept out of the netCDF files.
+    """
+
+    title: str
+    inputs: dict = field(default_factory=dict)
+    options: dict = field(default_factory=dict)
+    vehicle: dict = field(default_factory=dict)
+    headline: dict = field(default_factory=dict)
+    timings: dict = field(default_factory=dict)
+    _digests: dict = field(default_factory=dict, repr=False)
+    command_line: str = field(
+        default_factory=lambda: (
+            " ".join(["trackdyn", *sys.argv[1:]])
+            if Path(sys.argv[0]).name in ("trackdyn", "__main__.py")
+            else "trackdyn (called from Python)"
+        )
+    )
+
+    def input_digests(self) -> dict[str, tuple[str, str]]:
+        """Path and SHA-256 of each input file given (the built-in example: its name)."""
+        for name, path in self.inputs.items():
+            if name not in self._digests:
+                digest = "" if path is None else _sha256(path)
+                self._digests[name] = ("built-in example" if path is None else str(path), digest)
+        return dict(self._digests)
+
+    def summary(self, command: str, files: list[str], elapsed: float) -> dict:
+        """The content of ``summary.json``."""
+        from trackdyn import __version__
+
+        digests = self.input_digests()
+        return {
+            "trackdyn_version": __version__,
+            "command": command,
+            "command_line": self.command_line,
+            "title": self.title,
+            "inputs": {k: {"path": p, "sha256": d} for k, (p, d) in digests.items()},
+            "options": self.options,
+            "vehicle": self.vehicle,
+            "headline": self.headline,
+            "timings_s": {**self.timings, "total": elapsed},
+            "files": files,
+        }
+
+
+def _sha256(path) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as file:
+        for block in iter(lambda: file.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def record_of(path) -> Record | None:
+    """The record of the output folder whose staging folder holds ``path`` (None: none)."""
+    return _records.get(Path(path).parent)
 
 
 def _remove_and_exit() -> None:
@@ -73,7 +161,7 @@ def _manifest(out: Path) -> dict:
 
 
 @contextmanager
-def output_folder(out, command: str, overwrite: bool = False):
+def output_folder(out, command: str, overwrite: bool = False, record: Record | None = None):
     """Yield a staging folder; on success its files replace the command's files in ``out``.
 
     Parameters
@@ -84,7 +172,11 @@ def output_folder(out, command: str, overwrite: bool = False):
         The command writing it (``run``, ``study``, ...), recorded in the manifest.
     overwrite : bool
         Replace the outputs of another command found in ``out``.
+    record : Record, optional
+        The run's provenance: ``summary.json`` is written from it, netCDF files written into
+        the staging folder carry it.
     """
+    started = time.perf_counter()
     if not str(out).strip():
         raise TrackdynInputError("--out is empty: name an output folder")
     out = Path(out)
@@ -107,8 +199,14 @@ def output_folder(out, command: str, overwrite: bool = False):
     if created:
         _cleanup.append(out)
     _cleanup.append(stage)
+    if record is not None:
+        _records[stage] = record
     try:
         yield stage
+        if record is not None:
+            files = sorted([p.name for p in stage.iterdir()] + [SUMMARY])
+            summary = record.summary(command, files, time.perf_counter() - started)
+            (stage / SUMMARY).write_text(json.dumps(summary, indent=2, default=str) + "\n")
         _commit(out, stage, command, previous)
     except BaseException:
         shutil.rmtree(stage, ignore_errors=True)
@@ -117,6 +215,7 @@ def output_folder(out, command: str, overwrite: bool = False):
         raise
     finally:
         _cleanup[:] = [p for p in _cleanup if p not in (out, stage)]
+        _records.pop(stage, None)
 
 
 def _remove_stale_stages(out: Path) -> None:

@@ -22,9 +22,9 @@ from pathlib import Path
 from trackdyn.commands import plots
 from trackdyn.commands.tables import frame_table
 from trackdyn.errors import named
-from trackdyn.io import write_netcdf
+from trackdyn.netcdf import write_netcdf
 from trackdyn.options import RunOptions, Strict, TrackSpec, VehicleSpec, load_toml
-from trackdyn.staging import output_folder
+from trackdyn.staging import Record, output_folder
 
 
 class Scenario(Strict):
@@ -44,6 +44,44 @@ def load_scenario(path=None) -> tuple[Scenario, Path]:
         Scenario TOML file.
     """
     return load_toml(Scenario, path)
+
+
+def scenario_record(title: str, scenario, spec, base: Path, role: str = "scenario") -> Record:
+    """The record of a run scenario's command: its files, run options and vehicle source.
+
+    Parameters
+    ----------
+    title : str
+        What the outputs are.
+    scenario : path, optional
+        The scenario file (None: the built-in example).
+    spec : Scenario or Study
+        The file read, with ``[vehicle]``, ``[track]`` and ``[run]``.
+    base : Path
+        The folder its relative paths start from.
+    role : str
+        What the file is called in the record (``scenario``, ``study``).
+    """
+    geometry, supports = spec.track.paths(base)
+    inputs = {role: scenario, "geometry": geometry, "supports": supports}
+    source = spec.vehicle.source(base)
+    if isinstance(source, Path):
+        inputs["vehicle"] = source
+    options = {f"run_{k}": v for k, v in spec.run.model_dump().items()}
+    options["vehicle_source"] = str(source)
+    options.update({f"vehicle_override_{k}": v for k, v in spec.vehicle.overrides.items()})
+    return Record(title, inputs, options)
+
+
+def headline(table) -> dict:
+    """Run-wide extremes of a run's summary table (`trackdyn.results.summary`)."""
+    return {
+        "dyn_load_max_kN": float(table["dyn_load_max_kN"].max()),
+        "dyn_load_min_kN": float(table["dyn_load_min_kN"].min()),
+        "dyn_load_sd_max_kN": float(table["dyn_load_sd_kN"].max()),
+        "secondary_max_mm": float(table["secondary_max_mm"].iloc[0]),
+        "body_bounce_acc_rms_m_per_s2": float(table["body_bounce_acc_rms_m_per_s2"].iloc[0]),
+    }
 
 
 def run(scenario, out, overwrite: bool, console) -> None:
@@ -66,12 +104,16 @@ def run(scenario, out, overwrite: bool, console) -> None:
     spec, base = load_scenario(scenario)
     with named(scenario):
         vehicle = spec.vehicle.load(base)
-    with output_folder(out, "run", overwrite) as stage:
+    title = f"trackdyn run: {spec.run.model}, {vehicle.name}, {spec.run.speed_kmh:g} km/h"
+    record = scenario_record(title, scenario, spec, base)
+    record.vehicle = vehicle.as_dict()
+    with output_folder(out, "run", overwrite, record) as stage:
         with console.status("reading the track"):
             trk = spec.track.load(base)
         with named(scenario):
             ds = simulate(vehicle, trk, spec.run, progress=True)
         table = summary(ds)
+        record.headline = headline(table)
         write_netcdf(ds, stage / "results.nc")
         table.to_csv(stage / "summary.csv", index=False, float_format="%.4g")
         plots.wheel_loads(ds, stage / "wheel_loads.png")

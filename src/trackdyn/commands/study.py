@@ -5,9 +5,10 @@ from __future__ import annotations
 from pathlib import Path
 
 from trackdyn.commands import plots
+from trackdyn.commands.run import scenario_record
 from trackdyn.commands.tables import frame_table
 from trackdyn.errors import TrackdynInputError, named
-from trackdyn.io import write_netcdf
+from trackdyn.netcdf import write_netcdf
 from trackdyn.options import RunOptions, load_toml
 from trackdyn.staging import output_folder
 from trackdyn.studies.scenarios import Study
@@ -95,10 +96,20 @@ def study(study_file, out, overwrite: bool, workers, scheduler, console) -> None
     with named(study_file):
         spec.track.load(base)  # a bad track file is refused before any run
         runs = tasks(spec, base)
-    with output_folder(out, "study", overwrite) as stage:
+    title = f"trackdyn study: {spec.kind} study, {spec.run.model}, {len(runs)} runs"
+    record = scenario_record(title, study_file, spec, base, role="study")
+    record.options.update({"kind": spec.kind, spec.kind: spec.model_dump(mode="json")[spec.kind]})
+    with output_folder(out, "study", overwrite, record) as stage:
         results = run_study(runs, workers=workers, scheduler=scheduler, progress=True)
         table, ds = gather(results)
         ds.attrs.update(kind=spec.kind, model=spec.run.model)
+        ok = table[table["error"] == ""]
+        record.headline = {
+            "runs": len(table),
+            "failed_runs": len(table) - len(ok),
+            "dyn_load_max_kN": float(ok["dyn_load_max_kN"].max()) if len(ok) else None,
+            "dyn_load_sd_max_kN": float(ok["dyn_load_sd_kN"].max()) if len(ok) else None,
+        }
         write_study(table, ds, spec, stage)
     title = f"{spec.kind} study, {spec.run.model}: {len(runs)} runs"
     console.print(frame_table(table.drop(columns="error"), title))

@@ -20,7 +20,6 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
-import pandas as pd
 import xarray as xr
 
 from trackdyn.commands import plots
@@ -34,10 +33,10 @@ from trackdyn.io import (
     rail_rows,
     support_pieces,
     supports_of,
-    write_netcdf,
 )
 from trackdyn.limits import WHEEL_LOAD, check_within
-from trackdyn.staging import output_folder
+from trackdyn.netcdf import write_netcdf
+from trackdyn.staging import Record, output_folder
 from trackdyn.track.analysis import (
     SEGMENT_M,
     curve_picks,
@@ -278,8 +277,8 @@ def _join(parts: list[xr.Dataset]) -> xr.Dataset:
     return xr.Dataset(variables, coords=coords, attrs=first.attrs)
 
 
-def write_track_outputs(ds: xr.Dataset, picks, basin, folder) -> pd.DataFrame:
-    """Write ``track.nc`` and the three track figures into ``folder``; return the summary.
+def write_track_outputs(ds: xr.Dataset, picks, basin, folder) -> None:
+    """Write ``track.nc`` and the three track figures into ``folder``.
 
     Parameters
     ----------
@@ -298,7 +297,6 @@ def write_track_outputs(ds: xr.Dataset, picks, basin, folder) -> pd.DataFrame:
     plots.track_overview(ds, folder / "track_overview.png")
     plots.load_deflection(picks, ps, delta, folder / "load_deflection.png")
     plots.deflection_basin(*basin, ps, folder / "deflection_basin.png")
-    return summary_table(ds)
 
 
 def track(
@@ -331,14 +329,26 @@ def track(
     check_within(wheel_load_kN * 1e3, *WHEEL_LOAD, "--wheel-load-kN", "kN", 1e3)
     if (geometry is None) != (supports is None):
         raise TrackdynInputError("give both --geometry and --supports, or neither for the example")
-    if geometry is None:
+    given = geometry is not None
+    if not given:
         geometry, supports = example_path(EXAMPLE_GEOMETRY), example_path(EXAMPLE_SUPPORTS)
     section = rail_section(rail)
-    with output_folder(out, "track", overwrite) as stage:
+    record = Record(
+        f"trackdyn track: linearised track at Ps = {wheel_load_kN:g} kN, delta = {delta:g}",
+        {"geometry": geometry if given else None, "supports": supports if given else None},
+        {"wheel_load_kN": wheel_load_kN, "delta": delta, "rail": rail, "extrapolate": extrapolate},
+    )
+    with output_folder(out, "track", overwrite, record) as stage:
         with console.status("reading and linearising the track, piece by piece"):
             ds, picks, basin = analyse_pieces(
                 geometry, supports, wheel_load_kN * 1e3, delta, section, extrapolate=extrapolate
             )
-        table = write_track_outputs(ds, picks, basin, stage)
+        table = summary_table(ds)
+        record.headline = {
+            f"{col}_{rail}": float(value)
+            for rail, row in table.set_index("rail").iterrows()
+            for col, value in row.items()
+        }
+        write_track_outputs(ds, picks, basin, stage)
     console.print(frame_table(table, f"Track summary ({ds.attrs['geometry_source']})"))
     console.print(f"wrote track.nc and 3 figures to {out}")

@@ -10,7 +10,7 @@ from trackdyn.commands.deteriorate.plots import (
     quality_evolution,
     settlement_map,
 )
-from trackdyn.io import write_netcdf
+from trackdyn.netcdf import write_netcdf
 
 
 def summary(datasets) -> pd.DataFrame:
