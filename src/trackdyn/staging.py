@@ -60,6 +60,9 @@ class Record:
         The options the command ran with (flat, values numbers or text).
     vehicle : dict
         Vehicle parameters by name [SI units], where a vehicle was run.
+    command_line : str
+        The command as typed; default the process's arguments when it is the ``trackdyn``
+        command, else ``trackdyn <command> (called from Python)``.
     headline : dict
         The main results (filled by the command before its folder is committed), names with
         their units (``dyn_load_max_kN``).
@@ -74,13 +77,7 @@ class Record:
     headline: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
     _digests: dict = field(default_factory=dict, repr=False)
-    command_line: str = field(
-        default_factory=lambda: (
-            " ".join(["trackdyn", *sys.argv[1:]])
-            if Path(sys.argv[0]).name in ("trackdyn", "__main__.py")
-            else "trackdyn (called from Python)"
-        )
-    )
+    command_line: str = ""
 
     def input_digests(self) -> dict[str, tuple[str, str]]:
         """Path and SHA-256 of each input file given (the built-in example: its name)."""
@@ -115,6 +112,12 @@ def _sha256(path) -> str:
         for block in iter(lambda: file.read(1 << 20), b""):
             digest.update(block)
     return digest.hexdigest()
+
+
+def _command_line(command: str) -> str:
+    if Path(sys.argv[0]).name in ("trackdyn", "__main__.py") and command in sys.argv:
+        return " ".join(["trackdyn", *sys.argv[1:]])
+    return f"trackdyn {command} (called from Python)"
 
 
 def record_of(path) -> Record | None:
@@ -200,6 +203,7 @@ def output_folder(out, command: str, overwrite: bool = False, record: Record | N
         _cleanup.append(out)
     _cleanup.append(stage)
     if record is not None:
+        record.command_line = record.command_line or _command_line(command)
         _records[stage] = record
     try:
         yield stage

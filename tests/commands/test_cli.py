@@ -3,13 +3,13 @@
 import numpy as np
 import pandas as pd
 import pytest
-import xarray as xr
 from rich.console import Console
 from typer.testing import CliRunner
 
 from trackdyn.cli import app
 from trackdyn.commands.tables import frame_table, header
 from trackdyn.io import write_geometry, write_supports
+from trackdyn.netcdf import read_netcdf
 from trackdyn.track.synthetic import synthetic_track
 from trackdyn.vehicle.parameters import load_vehicle
 
@@ -67,12 +67,13 @@ def test_track_command_on_user_files(short_track, tmp_path):
     assert result.exit_code == 0, result.output
     names = {p.name for p in out.iterdir()} - {".trackdyn.json"}
     assert names == {
+        "summary.json",
         "track.nc",
         "track_overview.png",
         "load_deflection.png",
         "deflection_basin.png",
     }
-    ds = xr.load_dataset(out / "track.nc")
+    ds = read_netcdf(out / "track.nc")
     assert ds.k2.attrs["units"] == "N/m" and ds.k2.shape == (2, 500)  # 300 m / 0.6 m
     # loaded = unloaded + ys, 127.5 kN default wheel load
     ys_on_grid = np.interp(ds.distance, ds.sleeper_distance, ds.ys.sel(rail="left"))
@@ -96,13 +97,14 @@ def test_run_command_with_scenario(short_track, tmp_path):
     result = runner.invoke(app, ["run", str(scenario), "--out", str(out)])
     assert result.exit_code == 0, result.output
     assert {p.name for p in out.iterdir()} - {".trackdyn.json"} == {
+        "summary.json",
         "results.nc",
         "summary.csv",
         "wheel_loads.png",
         "secondary_displacement.png",
         "wedge_friction.png",
     }
-    ds = xr.load_dataset(out / "results.nc")
+    ds = read_netcdf(out / "results.nc")
     assert list(ds.contact.values) == ["FL", "FR", "BL", "BR"]
     assert ds.attrs["model"] == "7dof" and ds.attrs["vehicle"].startswith("empty")
     # rear axle from 20 m, front axle to 250 m: the centre covers 250 - 20 - axle span,
