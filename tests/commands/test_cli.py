@@ -101,6 +101,7 @@ def test_run_command_with_scenario(short_track, tmp_path):
         "results.nc",
         "summary.csv",
         "wheel_loads.png",
+        "wheel_load_exceedance.png",
         "secondary_displacement.png",
         "wedge_friction.png",
     }

@@ -127,7 +127,7 @@ def test_study_command(files, tmp_path):
     out = tmp_path / "out"
     result = CliRunner().invoke(app, ["study", str(study), "--out", str(out), "--workers", "1"])
     assert result.exit_code == 0, result.output
-    assert {p.name for p in out.iterdir()} - {".trackdyn.json"} == {
+    assert {p.name for p in out.iterdir()} - {".trackdyn.json", "summary.json"} == {
         "study.nc",
         "study.csv",
         "speed_sweep.png",

@@ -84,8 +84,34 @@ def headline(table) -> dict:
     }
 
 
+def write_run_figures(ds, spec: Scenario, folder: Path) -> None:
+    """Draw a run's figures into ``folder``: wheel loads, their exceedance, secondary
+    displacement and, with friction wedges, wedge friction.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The run.
+    spec : Scenario
+        Its scenario (δ, and whether the track is the built-in example, whose soft spot,
+        voids and structure are marked).
+    folder : Path
+        Output folder.
+    """
+    marks = plots.example_marks() if spec.track.geometry is None else []
+    delta = spec.run.delta
+    figures = {
+        "wheel_loads.png": plots.plot_wheel_loads(ds, delta, marks),
+        "wheel_load_exceedance.png": plots.plot_wheel_load_exceedance(ds, delta),
+        "secondary_displacement.png": plots.plot_secondary(ds, marks),
+        "wedge_friction.png": plots.plot_wedge_friction(ds),
+    }
+    for name, fig in figures.items():
+        plots.save(fig, folder / name)
+
+
 def run(scenario, out, overwrite: bool, console) -> None:
-    """Simulate the scenario; write results.nc, summary.csv and three figures into ``out``.
+    """Simulate the scenario; write results.nc, summary.csv, summary.json and four figures.
 
     Parameters
     ----------
@@ -116,10 +142,8 @@ def run(scenario, out, overwrite: bool, console) -> None:
         record.headline = headline(table)
         write_netcdf(ds, stage / "results.nc")
         table.to_csv(stage / "summary.csv", index=False, float_format="%.4g")
-        plots.wheel_loads(ds, stage / "wheel_loads.png")
-        plots.secondary(ds, stage / "secondary_displacement.png")
-        plots.wedge_friction(ds, stage / "wedge_friction.png")
+        write_run_figures(ds, spec, stage)
     console.print(
         frame_table(table, f"{ds.attrs['model']}: {vehicle.name}, {spec.run.speed_kmh:g} km/h")
     )
-    console.print(f"wrote results.nc, summary.csv and 3 figures to {out}")
+    console.print(f"wrote results.nc, summary.csv and 4 figures to {out}")

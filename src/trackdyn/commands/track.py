@@ -277,7 +277,7 @@ def _join(parts: list[xr.Dataset]) -> xr.Dataset:
     return xr.Dataset(variables, coords=coords, attrs=first.attrs)
 
 
-def write_track_outputs(ds: xr.Dataset, picks, basin, folder) -> None:
+def write_track_outputs(ds: xr.Dataset, picks, basin, folder, marks=()) -> None:
     """Write ``track.nc`` and the three track figures into ``folder``.
 
     Parameters
@@ -291,12 +291,17 @@ def write_track_outputs(ds: xr.Dataset, picks, basin, folder) -> None:
         Result of `trackdyn.track.analysis.voided_basin`.
     folder : Path
         Output folder.
+    marks : sequence of trackdyn.commands.plots.Mark
+        Stretches of track to mark on the overview (the example's features).
     """
+    from trackdyn.deterioration.loop import LoopOptions
+
     ps, delta = ds.attrs["static_wheel_load_N"], ds.attrs["delta"]
     write_netcdf(ds, folder / "track.nc")
-    plots.track_overview(ds, folder / "track_overview.png")
-    plots.load_deflection(picks, ps, delta, folder / "load_deflection.png")
-    plots.deflection_basin(*basin, ps, folder / "deflection_basin.png")
+    threshold = LoopOptions.model_fields["threshold_sd_mm"].default
+    plots.save(plots.plot_track_overview(ds, marks, threshold), folder / "track_overview.png")
+    plots.save(plots.plot_load_deflection(picks, ps, delta), folder / "load_deflection.png")
+    plots.save(plots.plot_deflection_basin(*basin, ps), folder / "deflection_basin.png")
 
 
 def track(
@@ -349,6 +354,6 @@ def track(
             for rail, row in table.set_index("rail").iterrows()
             for col, value in row.items()
         }
-        write_track_outputs(ds, picks, basin, stage)
+        write_track_outputs(ds, picks, basin, stage, [] if given else plots.example_marks())
     console.print(frame_table(table, f"Track summary ({ds.attrs['geometry_source']})"))
     console.print(f"wrote track.nc and 3 figures to {out}")
