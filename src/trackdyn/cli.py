@@ -1,6 +1,8 @@
 """Command-line interface: parses arguments, calls the commands, reports errors in one line.
 
-Each command's work is in its module of `trackdyn.commands`.
+Each command's work is in its module of `trackdyn.commands`. Results go to stdout,
+progress and status to stderr (`trackdyn.progress`). Nothing heavy is imported before a
+command runs, so ``trackdyn --version`` and ``--help`` answer at once.
 """
 
 from __future__ import annotations
@@ -11,19 +13,27 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.console import Console
-
-from trackdyn import __version__
-from trackdyn.errors import TrackdynInputError
 
 app = typer.Typer(
-    add_completion=False,
-    no_args_is_help=True,
+    context_settings={"help_option_names": ["-h", "--help"]},
     pretty_exceptions_enable=False,
     rich_markup_mode=None,
     help="Railway vehicle/track vertical dynamics and track deterioration prediction.",
 )
-console = Console()
+
+
+class _Stdout:
+    """The console of the results (stdout), made on first use: rich loads only then."""
+
+    def __getattr__(self, name):
+        from rich.console import Console
+
+        console = Console()
+        self.__dict__.update({"print": console.print, "status": console.status})
+        return getattr(console, name)
+
+
+console = _Stdout()
 OutOption = Annotated[str, typer.Option("--out", metavar="PATH", help="Output folder.")]
 OverwriteOption = Annotated[
     bool, typer.Option(help="Replace another command's outputs in the output folder.")
@@ -35,6 +45,8 @@ def refuse_bad_input(command):
 
     @functools.wraps(command)
     def wrapper(*args, **kwargs):
+        from trackdyn.errors import TrackdynInputError
+
         try:
             return command(*args, **kwargs)
         except TrackdynInputError as exc:
@@ -46,17 +58,37 @@ def refuse_bad_input(command):
 
 def _version(value: bool):
     if value:
+        from trackdyn import __version__
+
         print(f"trackdyn {__version__}")
         raise typer.Exit()
 
 
-@app.callback()
+@app.callback(invoke_without_command=True)
 def main(
+    ctx: typer.Context,
     version: Annotated[
         bool, typer.Option("--version", callback=_version, is_eager=True, help="Show version.")
     ] = False,
+    quiet: Annotated[
+        bool, typer.Option("--quiet", "-q", help="No progress or status on stderr.")
+    ] = False,
+    verbose: Annotated[
+        bool,
+        typer.Option("--verbose", "-v", help="Also the inputs' SHA-256 and timings on stderr."),
+    ] = False,
 ):
-    """Railway vehicle/track vertical dynamics and track deterioration prediction."""
+    """Railway vehicle/track vertical dynamics and track deterioration prediction.
+
+    Results go to stdout, progress and status to stderr; every command writes its files
+    and a summary.json into its output folder. Give -q or -v before the command.
+    """
+    from trackdyn.progress import set_verbosity
+
+    set_verbosity(0 if quiet else 2 if verbose else 1)
+    if ctx.invoked_subcommand is None:
+        print(ctx.get_help())
+        raise typer.Exit()
 
 
 @app.command()

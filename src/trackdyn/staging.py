@@ -30,8 +30,6 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from trackdyn.errors import TrackdynInputError
-
 MANIFEST = ".trackdyn.json"
 """File in an output folder naming the command that wrote it and its files."""
 
@@ -87,7 +85,12 @@ class Record:
                 self._digests[name] = ("built-in example" if path is None else str(path), digest)
         return dict(self._digests)
 
-    def summary(self, command: str, files: list[str], elapsed: float) -> dict:
+    def lines(self) -> list[str]:
+        """The inputs with their SHA-256 and the timings, one line each, for a reader."""
+        found = [f"input {k}: {p} {d}".rstrip() for k, (p, d) in self.input_digests().items()]
+        return found + [f"time {k}: {v:.3g} s" for k, v in self.timings.items()]
+
+    def summary(self, command: str, files: list[str]) -> dict:
         """The content of ``summary.json``."""
         from trackdyn import __version__
 
@@ -101,7 +104,7 @@ class Record:
             "options": self.options,
             "vehicle": self.vehicle,
             "headline": self.headline,
-            "timings_s": {**self.timings, "total": elapsed},
+            "timings_s": self.timings,
             "files": files,
         }
 
@@ -179,6 +182,8 @@ def output_folder(out, command: str, overwrite: bool = False, record: Record | N
         The run's provenance: ``summary.json`` is written from it, netCDF files written into
         the staging folder carry it.
     """
+    from trackdyn.errors import TrackdynInputError
+
     started = time.perf_counter()
     if not str(out).strip():
         raise TrackdynInputError("--out is empty: name an output folder")
@@ -209,7 +214,8 @@ def output_folder(out, command: str, overwrite: bool = False, record: Record | N
         yield stage
         if record is not None:
             files = sorted([p.name for p in stage.iterdir()] + [SUMMARY])
-            summary = record.summary(command, files, time.perf_counter() - started)
+            record.timings["total"] = time.perf_counter() - started
+            summary = record.summary(command, files)
             (stage / SUMMARY).write_text(json.dumps(summary, indent=2, default=str) + "\n")
         _commit(out, stage, command, previous)
     except BaseException:

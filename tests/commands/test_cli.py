@@ -1,5 +1,7 @@
 """The command line: outputs of each command (bad input: test_bad_input.py)."""
 
+import json
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -197,3 +199,30 @@ def test_a_staging_folder_of_a_killed_process_is_removed_by_the_next_run(tmp_pat
         (stage / "results.nc").write_text("whole")
     names = sorted(p.name for p in out.iterdir())
     assert names == [f".staging-{os.getppid()}-def", ".trackdyn.json", "results.nc"]
+
+
+def test_results_on_stdout_progress_and_status_on_stderr(short_track, tmp_path):
+    scenario = tmp_path / "s.toml"
+    scenario.write_text(
+        f'[track]\ngeometry = "{short_track / "geometry.csv"}"\n'
+        f'supports = "{short_track / "supports.csv"}"\n[run]\nmodel = "2dof"\n'
+    )
+    args = ["run", str(scenario), "--out", str(tmp_path / "out")]
+    normal = runner.invoke(app, args)
+    assert normal.exit_code == 0, normal.output
+    assert "ΔP max" in normal.stdout and "wrote" not in normal.stdout
+    assert "wrote results.nc" in normal.stderr
+    quiet = runner.invoke(app, ["-q", *args])
+    assert quiet.exit_code == 0 and quiet.stderr == "" and "ΔP max" in quiet.stdout
+    verbose = runner.invoke(app, ["-v", *args])
+    digest = json.loads((tmp_path / "out" / "summary.json").read_text())["inputs"]
+    assert f"input geometry: {short_track / 'geometry.csv'} {digest['geometry']['sha256']}" in (
+        verbose.stderr
+    )
+    assert "time total:" in verbose.stderr and "ΔP max" in verbose.stdout
+
+
+def test_short_help_option_and_bare_command():
+    assert runner.invoke(app, ["-h"]).exit_code == 0
+    bare = runner.invoke(app, [])
+    assert bare.exit_code == 0 and "Commands" in bare.stdout

@@ -24,6 +24,7 @@ from trackdyn.commands.tables import frame_table
 from trackdyn.errors import named
 from trackdyn.netcdf import write_netcdf
 from trackdyn.options import RunOptions, Strict, TrackSpec, VehicleSpec, load_toml
+from trackdyn.progress import note, status
 from trackdyn.staging import Record, output_folder
 
 
@@ -122,7 +123,7 @@ def run(scenario, out, overwrite: bool, console) -> None:
     overwrite : bool
         Replace another command's outputs in ``out``.
     console : rich.console.Console
-        Where progress and the summary table are shown.
+        Where the summary table is shown (stdout); progress goes to stderr.
     """
     from trackdyn.results import summary
     from trackdyn.simulation import simulate
@@ -134,7 +135,7 @@ def run(scenario, out, overwrite: bool, console) -> None:
     record = scenario_record(title, scenario, spec, base)
     record.vehicle = vehicle.as_dict()
     with output_folder(out, "run", overwrite, record) as stage:
-        with console.status("reading the track"):
+        with status("reading the track"):
             trk = spec.track.load(base)
         with named(scenario):
             ds = simulate(vehicle, trk, spec.run, progress=True)
@@ -146,4 +147,5 @@ def run(scenario, out, overwrite: bool, console) -> None:
     console.print(
         frame_table(table, f"{ds.attrs['model']}: {vehicle.name}, {spec.run.speed_kmh:g} km/h")
     )
-    console.print(f"wrote results.nc, summary.csv and 4 figures to {out}")
+    note(f"wrote results.nc, summary.csv, summary.json and 4 figures to {out}")
+    note("\n".join(record.lines()), 2)

@@ -12,6 +12,7 @@ from trackdyn.commands.tables import frame_table
 from trackdyn.errors import TrackdynInputError, named
 from trackdyn.netcdf import write_netcdf
 from trackdyn.options import RunOptions, load_toml
+from trackdyn.progress import note
 from trackdyn.staging import output_folder
 from trackdyn.studies.scenarios import Study
 
@@ -95,7 +96,7 @@ def study(study_file, out, overwrite: bool, workers, scheduler, console) -> None
     scheduler : str, optional
         Address of a running Dask scheduler.
     console : rich.console.Console
-        Where the table and failed runs are shown.
+        Where the table is shown (stdout); failed runs and progress go to stderr.
     """
     from trackdyn.studies.runner import gather, run_study
     from trackdyn.studies.scenarios import tasks
@@ -124,5 +125,6 @@ def study(study_file, out, overwrite: bool, workers, scheduler, console) -> None
     console.print(frame_table(table.drop(columns="error"), title))
     for _, row in table[table["error"] != ""].iterrows():
         labels = ", ".join(f"{c}={row[c]}" for c in runs[0].labels)
-        console.print(f"[red]failed[/red] ({labels}): {row['error']}")
-    console.print(f"wrote study.nc, study.csv and figures to {out}")
+        note(f"failed ({labels}): {row['error']}", 0)
+    note(f"wrote study.nc, study.csv, summary.json and figures to {out}")
+    note("\n".join(record.lines()), 2)

@@ -36,6 +36,7 @@ from trackdyn.io import (
 )
 from trackdyn.limits import WHEEL_LOAD, check_within
 from trackdyn.netcdf import write_netcdf
+from trackdyn.progress import note, status
 from trackdyn.staging import Record, output_folder
 from trackdyn.track.analysis import (
     SEGMENT_M,
@@ -327,7 +328,7 @@ def track(
     overwrite : bool
         Replace another command's outputs in ``out``.
     console : rich.console.Console
-        Where progress and the summary table are shown.
+        Where the summary table is shown (stdout); progress goes to stderr.
     """
     from trackdyn.data import EXAMPLE_GEOMETRY, EXAMPLE_SUPPORTS, example_path
 
@@ -344,7 +345,7 @@ def track(
         {"wheel_load_kN": wheel_load_kN, "delta": delta, "rail": rail, "extrapolate": extrapolate},
     )
     with output_folder(out, "track", overwrite, record) as stage:
-        with console.status("reading and linearising the track, piece by piece"):
+        with status("reading and linearising the track, piece by piece"):
             ds, picks, basin = analyse_pieces(
                 geometry, supports, wheel_load_kN * 1e3, delta, section, extrapolate=extrapolate
             )
@@ -356,4 +357,5 @@ def track(
         }
         write_track_outputs(ds, picks, basin, stage, [] if given else plots.example_marks())
     console.print(frame_table(table, f"Track summary ({ds.attrs['geometry_source']})"))
-    console.print(f"wrote track.nc and 3 figures to {out}")
+    note(f"wrote track.nc, summary.json and 3 figures to {out}")
+    note("\n".join(record.lines()), 2)
