@@ -208,3 +208,29 @@ def calibrate(
     from trackdyn.commands.calibrate import calibrate as job
 
     job(calibration, out, overwrite, workers, scheduler, console)
+
+
+@app.command()
+@refuse_bad_input
+def example(
+    name: Annotated[
+        str | None,
+        typer.Argument(
+            help="run, deteriorate, sections, study or calibration; none: list the examples."
+        ),
+    ] = None,
+    to: Annotated[
+        str, typer.Option("--to", metavar="PATH", help="Folder to write the files into.")
+    ] = "trackdyn-example",
+    overwrite: OverwriteOption = False,
+):
+    """Write the input files of a shipped example into a folder, ready to run."""
+    from trackdyn.commands.examples import listing, write_example
+    from trackdyn.progress import note
+
+    if name is None:
+        print(listing())
+        return
+    names, command = write_example(name, to, overwrite)
+    note(f"wrote {', '.join(names)} to {to}")
+    print(command)

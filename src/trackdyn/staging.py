@@ -167,7 +167,9 @@ def _manifest(out: Path) -> dict:
 
 
 @contextmanager
-def output_folder(out, command: str, overwrite: bool = False, record: Record | None = None):
+def output_folder(
+    out, command: str, overwrite: bool = False, record: Record | None = None, flag: str = "--out"
+):
     """Yield a staging folder; on success its files replace the command's files in ``out``.
 
     Parameters
@@ -181,20 +183,22 @@ def output_folder(out, command: str, overwrite: bool = False, record: Record | N
     record : Record, optional
         The run's provenance: ``summary.json`` is written from it, netCDF files written into
         the staging folder carry it.
+    flag : str
+        The command-line option that names the folder, for messages.
     """
     from trackdyn.errors import TrackdynInputError
 
     started = time.perf_counter()
     if not str(out).strip():
-        raise TrackdynInputError("--out is empty: name an output folder")
+        raise TrackdynInputError(f"{flag} is empty: name an output folder")
     out = Path(out)
     if out.exists() and not out.is_dir():
-        raise TrackdynInputError(f"--out {out}: exists and is not a folder")
+        raise TrackdynInputError(f"{flag} {out}: exists and is not a folder")
     previous = _manifest(out) if out.is_dir() else {}
     other = previous.get("command")
     if other and other != command and not overwrite:
         raise TrackdynInputError(
-            f"--out {out}: holds the outputs of 'trackdyn {other}'; choose another folder "
+            f"{flag} {out}: holds the outputs of 'trackdyn {other}'; choose another folder "
             "or give --overwrite"
         )
     created = not out.exists()
@@ -203,7 +207,7 @@ def output_folder(out, command: str, overwrite: bool = False, record: Record | N
         _remove_stale_stages(out)
         stage = Path(tempfile.mkdtemp(prefix=f".staging-{os.getpid()}-", dir=out))
     except OSError as exc:
-        raise TrackdynInputError(f"--out {out}: cannot write there ({exc.strerror})") from None
+        raise TrackdynInputError(f"{flag} {out}: cannot write there ({exc.strerror})") from None
     if created:
         _cleanup.append(out)
     _cleanup.append(stage)

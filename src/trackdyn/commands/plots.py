@@ -604,7 +604,7 @@ def plot_tornado(table, column: str = "dyn_load_sd_kN") -> Figure:
     column : str
         The statistic, a column of the table with its unit suffix.
     """
-    from trackdyn.commands.tables import header
+    from trackdyn.commands.tables import NOTES, header
 
     ok = table[table["error"] == ""]
     base = float(ok.loc[ok["parameter"] == "baseline", column].iloc[0])
@@ -615,7 +615,7 @@ def plot_tornado(table, column: str = "dyn_load_sd_kN") -> Figure:
     rows.sort(key=lambda r: max(abs(r[1]), abs(r[2])))
     fig, ax = plt.subplots(figsize=(10, 1.8 + 0.9 * len(rows)))
     y = np.arange(len(rows))
-    quantity = header(column).replace("\n", " ")
+    quantity, unit = (header(column).split("\n") + [""])[:2]
     if rows:  # none when every varied run failed
         ax.barh(
             y + 0.19,
@@ -634,8 +634,9 @@ def plot_tornado(table, column: str = "dyn_load_sd_kN") -> Figure:
         _legend_outside(ax)
     ax.set_yticks(y, [_parameter_name(r[0]) for r in rows], fontsize=9)
     ax.axvline(0, color="k", lw=0.8)
-    ax.set_xlabel(f"change of {quantity} from the baseline ({base:.2f})")
-    ax.set_title(f"Sensitivity of {quantity} to the vehicle parameters, one at a time")
+    ax.set_xlabel(f"change of {quantity} from the baseline, {base:.2f} {unit.strip('[]')} {unit}")
+    notes = [note for symbol, note in NOTES.items() if symbol in quantity]
+    ax.set_title("\n".join([f"Sensitivity of {quantity} to the vehicle parameters", *notes]))
     ax.grid(alpha=0.3, axis="x")
     return fig
 
@@ -690,7 +691,7 @@ def plot_spectra(
         split, rest = None, label_cols
     colour_by = rest[-1] if rest else None
     style_by = rest[0] if len(rest) > 1 else None
-    colours = _colours(ok[colour_by]) if colour_by else {}
+    colours = _colours(ok.loc[~baseline, colour_by]) if colour_by else {}
     styles = {}
     if style_by:
         values = dict.fromkeys(ok[style_by])
