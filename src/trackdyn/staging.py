@@ -6,7 +6,8 @@ run there. A manifest (`MANIFEST`) names the command and its files, so a folder 
 another command's outputs is refused unless ``overwrite`` is given. With a `Record` the
 folder also gets `SUMMARY` (``summary.json``): the trackdyn version, the command line, the
 options, the inputs with their SHA-256, the headline figures, how long the run took and the
-files; netCDF files written into the folder take their provenance from the same record
+files; and ``report.html``, all of it with the tables and figures in one page
+(`trackdyn.report`); netCDF files written into the folder take their provenance from the same record
 (`trackdyn.netcdf`).
 
 An interrupt (Ctrl-C, SIGTERM) ends the process at once with exit code 130: staging
@@ -217,10 +218,13 @@ def output_folder(
     try:
         yield stage
         if record is not None:
-            files = sorted([p.name for p in stage.iterdir()] + [SUMMARY])
+            from trackdyn.report import REPORT, render
+
+            files = sorted([p.name for p in stage.iterdir()] + [SUMMARY, REPORT])
             record.timings["total"] = time.perf_counter() - started
             summary = record.summary(command, files)
             (stage / SUMMARY).write_text(json.dumps(summary, indent=2, default=str) + "\n")
+            (stage / REPORT).write_text(render(summary, stage), encoding="utf-8")
         _commit(out, stage, command, previous)
     except BaseException:
         shutil.rmtree(stage, ignore_errors=True)

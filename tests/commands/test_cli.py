@@ -70,6 +70,7 @@ def test_track_command_on_user_files(short_track, tmp_path):
     names = {p.name for p in out.iterdir()} - {".trackdyn.json"}
     assert names == {
         "summary.json",
+        "report.html",
         "track.nc",
         "track_overview.png",
         "load_deflection.png",
@@ -100,6 +101,7 @@ def test_run_command_with_scenario(short_track, tmp_path):
     assert result.exit_code == 0, result.output
     assert {p.name for p in out.iterdir()} - {".trackdyn.json"} == {
         "summary.json",
+        "report.html",
         "results.nc",
         "summary.csv",
         "wheel_loads.png",

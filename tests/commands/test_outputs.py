@@ -1,9 +1,13 @@
 """What the commands write for toolchains: CF-1.8 netCDF with provenance, summary.json,
 the same bytes for the same run."""
 
+import base64
 import hashlib
 import json
+import shutil
+import subprocess
 import warnings
+from html.parser import HTMLParser
 
 import numpy as np
 import pytest
@@ -166,3 +170,57 @@ def test_identical_runs_write_identical_netcdf_files(outputs):
         result = runner.invoke(app, [*args, "--out", str(folders[command])])
         assert result.exit_code == 0, result.output
         assert (folders[command] / NETCDF[command]).read_bytes() == first[NETCDF[command]]
+
+
+class _Page(HTMLParser):
+    """The tags, image sources and text of an HTML page."""
+
+    def __init__(self):
+        super().__init__()
+        self.tags, self.images, self.text = [], [], []
+
+    def handle_starttag(self, tag, attrs):
+        self.tags.append(tag)
+        if tag == "img":
+            self.images.append(dict(attrs)["src"])
+
+    def handle_data(self, data):
+        self.text.append(data)
+
+
+@pytest.mark.parametrize("command", ["run", "track", "study", "deteriorate"])
+def test_report_holds_provenance_tables_and_every_figure(outputs, command):
+    _, folders = outputs
+    folder = folders[command]
+    page = _Page()
+    page.feed((folder / "report.html").read_text(encoding="utf-8"))
+    text = " ".join(page.text)
+    summary = json.loads((folder / "summary.json").read_text())
+    pngs = sorted(p for p in folder.iterdir() if p.suffix == ".png")
+    assert len(page.images) == len(pngs) > 0
+    for src, png in zip(page.images, pngs, strict=True):  # embedded, in file order
+        assert src == "data:image/png;base64," + base64.b64encode(png.read_bytes()).decode()
+    csvs = [p.name for p in folder.iterdir() if p.suffix == ".csv"]
+    assert all(name in text for name in csvs) and page.tags.count("table") >= 3 + len(csvs)
+    assert summary["title"] in text and summary["command_line"] in text
+    assert all(item["sha256"] in text for item in summary["inputs"].values())
+
+
+@pytest.mark.slow
+def test_report_renders_in_a_browser(outputs, tmp_path):
+    """Where chromium is installed (CI installs Debian's), a headless screenshot of the run's
+    report is not blank."""
+    browser = shutil.which("chromium") or shutil.which("chromium-browser")
+    if browser is None:
+        pytest.skip("no chromium")
+    from PIL import Image
+
+    _, folders = outputs
+    shot = tmp_path / "shot.png"
+    subprocess.run(
+        [browser, "--headless", "--no-sandbox", "--disable-gpu", f"--screenshot={shot}",
+         "--window-size=1200,2000", (folders["run"] / "report.html").as_uri()],
+        check=True, capture_output=True, timeout=120,
+    )  # fmt: skip
+    pixels = np.asarray(Image.open(shot).convert("L"), dtype=float)
+    assert pixels.std() > 10  # text, tables and figures, not one colour
