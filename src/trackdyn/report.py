@@ -46,13 +46,17 @@ code { background: #f4f4f4; padding: 0 0.2em; }
 {% for name, header, rows, cut in tables %}
 <h2>{{ name }}</h2>
 <table><tr>{% for h in header %}<th>{{ h }}</th>{% endfor %}</tr>
-{% for row in rows %}<tr>{% for v in row %}<td{% if number(v) %} class="number"{% endif %}>{{ v }}</td>{% endfor %}</tr>
+{% for row in rows %}<tr>{% for v in row %}
+<td{% if number(v) %} class="number"{% endif %}>{{ v }}</td>{% endfor %}</tr>
 {% endfor %}</table>
-{% if cut %}<p>The first {{ rows | length }} of {{ cut }} rows; the file holds them all.</p>{% endif %}
+{% if cut %}
+<p>The first {{ rows | length }} of {{ cut }} rows; the file holds them all.</p>
+{% endif %}
 {% endfor %}
 <h2>Inputs</h2>
 <table><tr><th>input</th><th>path</th><th>SHA-256</th></tr>
-{% for name, item in summary.inputs.items() %}<tr><td>{{ name }}</td><td>{{ item.path }}</td><td><code>{{ item.sha256 }}</code></td></tr>
+{% for name, item in summary.inputs.items() %}
+<tr><td>{{ name }}</td><td>{{ item.path }}</td><td><code>{{ item.sha256 }}</code></td></tr>
 {% endfor %}</table>
 <h2>Options</h2>
 {{ pairs(summary.options) }}
