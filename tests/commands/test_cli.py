@@ -9,7 +9,7 @@ from rich.console import Console
 from typer.testing import CliRunner
 
 from trackdyn.cli import app
-from trackdyn.commands.tables import frame_table, header
+from trackdyn.commands.tables import deterioration_table, frame_table, header
 from trackdyn.io import write_geometry, write_supports
 from trackdyn.netcdf import read_netcdf
 from trackdyn.track.synthetic import synthetic_track
@@ -228,3 +228,13 @@ def test_short_help_option_and_bare_command():
     assert runner.invoke(app, ["-h"]).exit_code == 0
     bare = runner.invoke(app, [])
     assert bare.exit_code == 0 and "Commands" in bare.stdout
+
+
+def test_deterioration_table_writes_never_for_no_trigger():
+    row = dict(section="a", mgt=50.0, steps=3, settlement_min_mm=1.0, settlement_mean_mm=2.0,
+               settlement_max_mm=3.0, d1_sd_max_initial_mm=1.0, d1_sd_max_final_mm=1.2,
+               first_trigger_mgt=np.inf)  # fmt: skip
+    console = Console(width=120, record=True)
+    console.print(deterioration_table(pd.DataFrame([row]), "x"))
+    text = console.export_text()
+    assert "never" in text and "inf" not in text and "trigger [MGT]" in text
