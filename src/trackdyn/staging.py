@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
 import shutil
 import signal
@@ -116,6 +117,22 @@ def _sha256(path) -> str:
         for block in iter(lambda: file.read(1 << 20), b""):
             digest.update(block)
     return digest.hexdigest()
+
+
+def _json(value):
+    """``value`` as JSON takes it: numpy numbers as Python's, NaN and infinity (a tonnage
+    never reached) as null, anything else unknown as text."""
+    if isinstance(value, dict):
+        return {str(k): _json(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_json(v) for v in value]
+    if isinstance(value, bool) or value is None or isinstance(value, str):
+        return value
+    if hasattr(value, "item"):  # numpy scalar
+        value = value.item()
+    if isinstance(value, int | float):
+        return value if isinstance(value, int) or math.isfinite(value) else None
+    return str(value)
 
 
 def _command_line(command: str) -> str:
@@ -223,7 +240,8 @@ def output_folder(
             files = sorted([p.name for p in stage.iterdir()] + [SUMMARY, REPORT])
             record.timings["total"] = time.perf_counter() - started
             summary = record.summary(command, files)
-            (stage / SUMMARY).write_text(json.dumps(summary, indent=2, default=str) + "\n")
+            text = json.dumps(_json(summary), indent=2, allow_nan=False)
+            (stage / SUMMARY).write_text(text + "\n")
             (stage / REPORT).write_text(render(summary, stage), encoding="utf-8")
         _commit(out, stage, command, previous)
     except BaseException:

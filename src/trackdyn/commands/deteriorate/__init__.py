@@ -48,6 +48,7 @@ def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> 
     record = Record(title, {"scenario": scenario}, spec.model_dump(mode="json"))
     with output_folder(out, "deteriorate", overwrite, record) as stage:
         datasets = run_sections(tasks, workers=workers, scheduler=scheduler, progress=not serial)
+        record.headline = {"sections": summary(datasets).to_dict(orient="records")}
         files = write_outputs(datasets, stage)
     title = f"Deterioration, {spec.run.model}: {len(datasets)} section(s)"
     console.print(deterioration_table(summary(datasets), title))
