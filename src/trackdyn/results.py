@@ -28,7 +28,7 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
     """
     dofs = list(model.dof_names)
     wedge = ("time", "wedge")
-    data = {
+    data: dict[str, tuple] = {
         "wheel_load": (
             ("time", "contact"),
             out["wl"],

@@ -17,6 +17,7 @@ from matplotlib.colors import to_rgb  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
 RAIL_COLOURS = {"left": "tab:blue", "right": "tab:red"}
+TAB10 = tuple(f"C{i}" for i in range(10))  # matplotlib's default cycle: tab10
 # Line style, width and darkening of the contacts on one rail, front to back: where two
 # contacts see the same track, the wide light line of the first shows around the darker
 # dashes of the next.
@@ -194,7 +195,7 @@ def plot_load_deflection(picks, static_load: float, delta: float) -> Figure:
     """
     ps, dp = static_load, delta * static_load
     fig, ax = plt.subplots(figsize=(12, 6))
-    for j, (pick, colour) in enumerate(zip(picks, plt.cm.tab10.colors, strict=False)):
+    for j, (pick, colour) in enumerate(zip(picks, TAB10, strict=False)):
         curve = pick.curve
         loads = np.linspace(curve.load[0], curve.load[-1], 200)
         ax.plot(curve.deflection * 1e3, curve.load / 1e3, "o", color=colour, ms=4)
@@ -488,7 +489,7 @@ def plot_secondary(ds, marks=()) -> Figure:
             side = s[-1:] if s[-1:] in ("L", "R") else ""
             colour = RAIL_COLOURS["left" if side == "L" else "right" if side == "R" else "left"]
             if not side and k:
-                colour = plt.cm.tab10.colors[k]
+                colour = TAB10[k]
             y = ds.secondary_displacement.sel(suspension=s).values * 1e3
             x = ds.distance.values + offsets[s]
             _full_and_zoom(row, x, y, color=colour, lw=1.6, ls="-", label=s)
@@ -529,7 +530,7 @@ def plot_wedge_friction(ds) -> Figure:
                 disp[window.values],
                 force[window.values],
                 lw=1.0,
-                color=plt.cm.tab10.colors[k % 10],
+                color=TAB10[k % 10],
                 label=w,
             )
     ax1.set_xlabel("displacement across the secondary suspension [mm] (compression +)")
@@ -645,7 +646,7 @@ def _colours(values) -> dict:
     """A colour per value: tab10 for up to ten, else viridis in order."""
     values = list(dict.fromkeys(values))
     if len(values) <= 10:
-        return dict(zip(values, plt.cm.tab10.colors, strict=False))
+        return dict(zip(values, TAB10, strict=False))
     return dict(zip(values, plt.cm.viridis(np.linspace(0, 0.9, len(values))), strict=True))
 
 

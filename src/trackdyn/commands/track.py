@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import xarray as xr
@@ -80,7 +81,8 @@ class _Rows:
 
     def __init__(self, pieces: Iterator, distance: Callable, take: Callable, concat: Callable):
         self._pieces, self._distance, self._take, self._concat = pieces, distance, take, concat
-        self.rows, self.done = None, False
+        self.rows: Any = None
+        self.done = False
 
     @property
     def distance(self) -> np.ndarray:
@@ -163,9 +165,10 @@ def track_pieces(
                 geo.rows = geo.up_to(max(last, geo.distance[0]))
         part = geo.rows if cut is None else geo.up_to(end)
         found = [r.rows if cut is None else r.up_to(end + PAD_M) for r in rails]
-        track = Track(Geometry(*part, str(geometry)), supports_of(found, supports))
+        distance, left, right = part
+        track = Track(Geometry(distance, left, right, str(geometry)), supports_of(found, supports))
         yield Piece(track, (lo, np.inf if cut is None else cut))
-        if cut is None:
+        if cut is None or x0 is None:  # x0 is None only with cut None
             return
         d = geo.distance
         start = d[_anchors(d, x0) & (d <= cut - margin)]
@@ -302,7 +305,9 @@ def write_track_outputs(ds: xr.Dataset, picks, basin, folder, marks=()) -> None:
     threshold = LoopOptions.model_fields["threshold_sd_mm"].default
     plots.save(plots.plot_track_overview(ds, marks, threshold), folder / "track_overview.png")
     plots.save(plots.plot_load_deflection(picks, ps, delta), folder / "load_deflection.png")
-    plots.save(plots.plot_deflection_basin(*basin, ps), folder / "deflection_basin.png")
+    rail, x0, with_gap, without_gap = basin
+    fig = plots.plot_deflection_basin(rail, x0, with_gap, without_gap, ps)
+    plots.save(fig, folder / "deflection_basin.png")
 
 
 def track(
