@@ -642,6 +642,11 @@ def plot_tornado(table, column: str = "dyn_load_sd_kN") -> Figure:
     return fig
 
 
+def _label(column: str, value) -> str:
+    """A study label as a legend shows it: ``60 km/h``, ``damping low``."""
+    return f"{value:g} km/h" if column == "speed_kmh" else f"{column} {value}"
+
+
 def _colours(values) -> dict:
     """A colour per value: tab10 for up to ten, else viridis in order."""
     values = list(dict.fromkeys(values))
@@ -709,7 +714,7 @@ def plot_spectra(
             style = {
                 "color": colours[row[colour_by]] if colour_by else "tab:blue",
                 "ls": styles[row[style_by]] if style_by else "-",
-                "label": ", ".join(f"{c} {row[c]}" for c in rest),
+                "label": ", ".join(_label(c, row[c]) for c in rest),
             }
             ax.loglog(freq[positive], ds.wheel_load_psd.isel(run=run).values[positive], **style)
         for run in ok.index[baseline]:
@@ -730,9 +735,13 @@ def plot_spectra(
             for length, name, ls in lines:
                 if length:
                     f = v / 3.6 / length
-                    at = f" at {v:g} km/h" if len(speeds) > 1 else ""
-                    label = f"{name}, {length:g} m: {f:.1f} Hz{at}" if k == 0 else None
-                    ax.axvline(f, color=colour, lw=1.0, ls=ls, label=label)
+                    if len(speeds) > 1:
+                        text = f"{name}, {length:g} m: at each speed, in its colour"
+                    else:
+                        text = f"{name}, {length:g} m: {f:.1f} Hz"
+                    if k == 0:  # the legend entry in grey: the lines take the speeds' colours
+                        ax.plot([], [], color="0.3", lw=1.0, ls=ls, label=text)
+                    ax.axvline(f, color=colour, lw=1.0, ls=ls)
         ax.set_ylabel("PSD [kN²/Hz]")
         if split is not None:
             ax.set_title(f"{split} {panel}", fontsize=10, loc="left")
