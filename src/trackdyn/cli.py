@@ -34,6 +34,23 @@ class _Stdout:
 
 
 console = _Stdout()
+
+
+class _Listed(typer.core.TyperCommand):
+    """A command whose help ends with the names and keys it accepts, read from the
+    registries when the help is shown (`trackdyn.commands.choices`), not at start-up."""
+
+    @property
+    def epilog(self):
+        from trackdyn.commands.choices import choices
+
+        return choices(self.name)
+
+    @epilog.setter
+    def epilog(self, value):
+        pass  # always the listing
+
+
 OutOption = Annotated[str, typer.Option("--out", metavar="PATH", help="Output folder.")]
 OverwriteOption = Annotated[
     bool, typer.Option(help="Replace another command's outputs in the output folder.")
@@ -91,7 +108,7 @@ def main(
         raise typer.Exit()
 
 
-@app.command()
+@app.command(cls=_Listed)
 @refuse_bad_input
 def track(
     geometry: Annotated[
@@ -119,7 +136,7 @@ def track(
     job(geometry, supports, wheel_load_kN, delta, rail, extrapolate, out, overwrite, console)
 
 
-@app.command()
+@app.command(cls=_Listed)
 @refuse_bad_input
 def run(
     scenario: Annotated[
@@ -137,7 +154,7 @@ def run(
     job(scenario, out, overwrite, console)
 
 
-@app.command()
+@app.command(cls=_Listed)
 @refuse_bad_input
 def study(
     study_file: Annotated[
@@ -159,7 +176,7 @@ def study(
     job(study_file, out, overwrite, workers, scheduler, console)
 
 
-@app.command()
+@app.command(cls=_Listed)
 @refuse_bad_input
 def deteriorate(
     scenario: Annotated[
@@ -186,7 +203,7 @@ def deteriorate(
     job(scenario, out, overwrite, workers, scheduler, console)
 
 
-@app.command()
+@app.command(cls=_Listed)
 @refuse_bad_input
 def calibrate(
     calibration: Annotated[Path, typer.Argument(help="Calibration TOML (surveys, fit).")],

@@ -238,3 +238,29 @@ def test_deterioration_table_writes_never_for_no_trigger():
     console.print(deterioration_table(pd.DataFrame([row]), "x"))
     text = console.export_text()
     assert "never" in text and "inf" not in text and "trigger [MGT]" in text
+
+
+def test_help_lists_models_presets_and_keys():
+    from trackdyn.options import RunOptions
+    from trackdyn.vehicle.models import MODELS
+    from trackdyn.vehicle.parameters import PRESETS
+
+    text = " ".join(runner.invoke(app, ["run", "-h"]).stdout.split())  # lines joined
+    assert f"Models: {', '.join(MODELS)}." in text
+    presets = [p.name.removesuffix(".toml") for p in PRESETS.iterdir()]
+    assert all(p in text for p in presets)
+    assert f"[run] {', '.join(RunOptions.model_fields)}" in text
+
+
+@pytest.mark.slow
+def test_the_cli_starts_without_numpy_or_rich():
+    """`trackdyn --version` imports neither (benchmarks/cli.py times it)."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys; from trackdyn.cli import app; "
+        "print(sorted({'numpy', 'rich', 'scipy', 'pandas'} & set(sys.modules)))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
