@@ -11,7 +11,9 @@ the Dataset the command goes on to plot:
 - every dimension has an index coordinate: a dimension labelled by names (``contact``,
   ``rail``, ``dof``, ...) is written as an integer index with the names in the label
   variable ``<dim>_name`` (CF 6.1: a coordinate variable is numeric); a dimension without a
-  coordinate (``sleeper``, ``segment``, ...) gets an integer index;
+  coordinate gets as index the one strictly increasing coordinate along it (``sleeper``:
+  the positions of ``sleeper_distance``, so that ``ds.settlement.plot()`` draws against
+  distance), else an integer index (``segment``, ``step``);
 - no ``_FillValue`` on coordinates; 64-bit integers as 32-bit; every variable has a
   ``long_name`` (taken from its name where the Dataset gives none) and, where the name ends
   in a unit (``dyn_load_sd_kN``), its ``units``; units in UDUNITS spelling (``MGT``, million
@@ -96,6 +98,20 @@ def _describe(var, name: str) -> None:
         attrs["long_name"] += f", {positive} positive"
 
 
+def _index(ds, dim: str):
+    """The index coordinate of a dimension that has none: the one strictly increasing
+    numeric coordinate along it (``sleeper_distance`` for ``sleeper``), else 0, 1, 2..."""
+    along = [
+        c for c in ds.coords.values()
+        if c.dims == (dim,) and c.dtype.kind == "f" and np.all(np.diff(c.values) > 0)
+    ]  # fmt: skip
+    if len(along) == 1:
+        c = along[0]
+        return (dim, c.values, {"long_name": str(c.name).replace("_", " "), **c.attrs})
+    index = np.arange(ds.sizes[dim], dtype=np.int32)
+    return (dim, index, {"long_name": f"{dim} index (0: first)"})
+
+
 def to_cf(ds, record=None):
     """The Dataset as `write_netcdf` writes it (a copy; ``ds`` is left as it is).
 
@@ -114,8 +130,7 @@ def to_cf(ds, record=None):
             out = out.drop_vars(dim).assign_coords({f"{dim}{LABEL_SUFFIX}": names})
             out[f"{dim}{LABEL_SUFFIX}"].attrs.setdefault("long_name", f"{dim} name")
         if dim not in out.indexes:
-            index = np.arange(out.sizes[dim], dtype=np.int32)
-            out = out.assign_coords({dim: (dim, index, {"long_name": f"{dim} index (0: first)"})})
+            out = out.assign_coords({dim: _index(out, dim)})
     out = out.rename({k: v for k, v in RENAMED.items() if k in out.dims})
     for name, var in out.variables.items():
         if var.dtype.kind in "iu" and var.dtype.itemsize > 4:

@@ -121,6 +121,9 @@ def test_netcdf_files_say_what_made_them(outputs, command):
             assert var.attrs.get("long_name"), name
             assert "_FillValue" not in var.encoding or name not in ds.coords, name
         assert set(ds.dims) <= set(ds.indexes)  # every dimension has an index coordinate
+        if "sleeper" in ds.dims:  # the positions: ds.k2.plot() draws against distance
+            np.testing.assert_array_equal(ds.sleeper, ds.sleeper_distance)
+            assert ds.sleeper.attrs["units"] == "m"
     assert attrs["Conventions"] == "CF-1.8"
     assert attrs["trackdyn_version"] == trackdyn.__version__
     assert attrs["title"] and attrs["history"].startswith(f"trackdyn {command}")
