@@ -1,12 +1,14 @@
-"""Write three synthetic surveys of a 200 m section for calibration.toml.
+"""Make the three synthetic surveys of a 200 m section shipped with the calibration example.
 
 The surveys are made by the model itself with known parameters (power law, K_s = 0.8 mm,
 load exponent 2.5) at 0, 2 and 5 MGT of the coal traffic, with 0.3 mm of measurement
 noise and a 2.7 m distance offset of the later surveys, so `trackdyn calibrate` can be
-seen to find those values again:
+seen to find those values again. The files are shipped in the package, next to the
+example's calibration.toml; ``trackdyn example calibration --to DIR`` writes them out:
 
-    python examples/calibration/make_surveys.py
-    trackdyn calibrate examples/calibration/calibration.toml --out calibration-out
+    python examples/calibration/make_surveys.py     # remakes the shipped files
+    trackdyn example calibration --to cal
+    trackdyn calibrate cal/calibration.toml --out calibration-out
 """
 
 from pathlib import Path
@@ -18,7 +20,7 @@ from trackdyn.options import RunOptions
 from trackdyn.track.synthetic import SoftSpot, synthetic_track
 from trackdyn.vehicle.parameters import load_vehicle
 
-HERE = Path(__file__).parent
+HERE = Path(__file__).parents[2] / "src" / "trackdyn" / "examples" / "calibration"
 
 
 def main() -> None:

@@ -1,6 +1,8 @@
 """Command-line interface: parses arguments, calls the commands, reports errors in one line.
 
-Each command's work is in its module of `trackdyn.commands`.
+Each command's work is in its module of `trackdyn.commands`. Results go to stdout,
+progress and status to stderr (`trackdyn.progress`). Nothing heavy is imported before a
+command runs, so ``trackdyn --version`` and ``--help`` answer at once.
 """
 
 from __future__ import annotations
@@ -11,19 +13,44 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.console import Console
-
-from trackdyn import __version__
-from trackdyn.errors import TrackdynInputError
 
 app = typer.Typer(
-    add_completion=False,
-    no_args_is_help=True,
+    context_settings={"help_option_names": ["-h", "--help"]},
     pretty_exceptions_enable=False,
     rich_markup_mode=None,
     help="Railway vehicle/track vertical dynamics and track deterioration prediction.",
 )
-console = Console()
+
+
+class _Stdout:
+    """The console of the results (stdout), made on first use: rich loads only then."""
+
+    def __getattr__(self, name):
+        from rich.console import Console
+
+        console = Console()
+        self.__dict__.update({"print": console.print, "status": console.status})
+        return getattr(console, name)
+
+
+console = _Stdout()
+
+
+class _Listed(typer.core.TyperCommand):
+    """A command whose help ends with the names and keys it accepts, read from the
+    registries when the help is shown (`trackdyn.commands.choices`), not at start-up."""
+
+    @property
+    def epilog(self):
+        from trackdyn.commands.choices import choices
+
+        return choices(self.name)
+
+    @epilog.setter
+    def epilog(self, value):
+        pass  # always the listing
+
+
 OutOption = Annotated[str, typer.Option("--out", metavar="PATH", help="Output folder.")]
 OverwriteOption = Annotated[
     bool, typer.Option(help="Replace another command's outputs in the output folder.")
@@ -35,6 +62,8 @@ def refuse_bad_input(command):
 
     @functools.wraps(command)
     def wrapper(*args, **kwargs):
+        from trackdyn.errors import TrackdynInputError
+
         try:
             return command(*args, **kwargs)
         except TrackdynInputError as exc:
@@ -46,20 +75,40 @@ def refuse_bad_input(command):
 
 def _version(value: bool):
     if value:
+        from trackdyn import __version__
+
         print(f"trackdyn {__version__}")
         raise typer.Exit()
 
 
-@app.callback()
+@app.callback(invoke_without_command=True)
 def main(
+    ctx: typer.Context,
     version: Annotated[
         bool, typer.Option("--version", callback=_version, is_eager=True, help="Show version.")
     ] = False,
+    quiet: Annotated[
+        bool, typer.Option("--quiet", "-q", help="No progress or status on stderr.")
+    ] = False,
+    verbose: Annotated[
+        bool,
+        typer.Option("--verbose", "-v", help="Also the inputs' SHA-256 and timings on stderr."),
+    ] = False,
 ):
-    """Railway vehicle/track vertical dynamics and track deterioration prediction."""
+    """Railway vehicle/track vertical dynamics and track deterioration prediction.
+
+    Results go to stdout, progress and status to stderr; every command writes its files
+    and a summary.json into its output folder. Give -q or -v before the command.
+    """
+    from trackdyn.progress import set_verbosity
+
+    set_verbosity(0 if quiet else 2 if verbose else 1)
+    if ctx.invoked_subcommand is None:
+        print(ctx.get_help())
+        raise typer.Exit()
 
 
-@app.command()
+@app.command(cls=_Listed)
 @refuse_bad_input
 def track(
     geometry: Annotated[
@@ -87,7 +136,7 @@ def track(
     job(geometry, supports, wheel_load_kN, delta, rail, extrapolate, out, overwrite, console)
 
 
-@app.command()
+@app.command(cls=_Listed)
 @refuse_bad_input
 def run(
     scenario: Annotated[
@@ -105,7 +154,7 @@ def run(
     job(scenario, out, overwrite, console)
 
 
-@app.command()
+@app.command(cls=_Listed)
 @refuse_bad_input
 def study(
     study_file: Annotated[
@@ -127,7 +176,7 @@ def study(
     job(study_file, out, overwrite, workers, scheduler, console)
 
 
-@app.command()
+@app.command(cls=_Listed)
 @refuse_bad_input
 def deteriorate(
     scenario: Annotated[
@@ -154,7 +203,7 @@ def deteriorate(
     job(scenario, out, overwrite, workers, scheduler, console)
 
 
-@app.command()
+@app.command(cls=_Listed)
 @refuse_bad_input
 def calibrate(
     calibration: Annotated[Path, typer.Argument(help="Calibration TOML (surveys, fit).")],
@@ -176,3 +225,29 @@ def calibrate(
     from trackdyn.commands.calibrate import calibrate as job
 
     job(calibration, out, overwrite, workers, scheduler, console)
+
+
+@app.command()
+@refuse_bad_input
+def example(
+    name: Annotated[
+        str | None,
+        typer.Argument(
+            help="run, deteriorate, sections, study or calibration; none: list the examples."
+        ),
+    ] = None,
+    to: Annotated[
+        str, typer.Option("--to", metavar="PATH", help="Folder to write the files into.")
+    ] = "trackdyn-example",
+    overwrite: OverwriteOption = False,
+):
+    """Write the input files of a shipped example into a folder, ready to run."""
+    from trackdyn.commands.examples import listing, write_example
+    from trackdyn.progress import note
+
+    if name is None:
+        print(listing())
+        return
+    names, command = write_example(name, to, overwrite)
+    note(f"wrote {', '.join(names)} to {to}")
+    print(command)

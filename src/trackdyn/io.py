@@ -372,12 +372,3 @@ def atomic_write(path, write) -> None:
     finally:
         if tmp.exists():
             tmp.unlink()
-
-
-def write_netcdf(ds, path) -> None:
-    """Write a Dataset to netCDF-4, uncompressed.
-
-    Simulated float64 time series are mostly noise in their last digits: zlib saved about
-    20 % of a 1 km run's file (24.5 against 31 MB) and took 0.9 s against 0.07 s to write.
-    """
-    ds.to_netcdf(path, format="NETCDF4")

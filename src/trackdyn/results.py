@@ -17,7 +17,9 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
     profile (mean over the contact's axles) and the summed stiffness each contact sees;
     ``secondary_displacement`` (time, suspension) [m]; ``wedge_force`` (time, wedge) [N];
     ``wedge_velocity`` [m/s]; ``displacement``, ``velocity`` and ``acceleration`` (time,
-    dof); ``body_<motion>_acceleration`` [m/s^2 or rad/s^2]. A model with single-wheel
+    dof), in the units of each degree of freedom (coordinate ``dof_units``: ``m`` for a
+    bounce, ``rad`` for a roll or pitch; per second and per second squared);
+    ``body_<motion>_acceleration`` [m/s^2 or rad/s^2]. A model with single-wheel
     contacts grouped by bogie side (``model.contact_sides``) also gets
     ``wheel_load_side_mean`` (time, side) [N], the mean over the wheels of each side, which
     compares one to one with the ``wheel_load`` of the bogie models (5.4.3), and the
@@ -26,7 +28,7 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
     """
     dofs = list(model.dof_names)
     wedge = ("time", "wedge")
-    data = {
+    data: dict[str, tuple] = {
         "wheel_load": (
             ("time", "contact"),
             out["wl"],
@@ -41,8 +43,7 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
             {
                 "units": "m",
                 "long_name": "track input under the contact "
-                "(loaded profile, or unloaded for the nonlinear track)",
-                "positive": "down",
+                "(loaded profile, or unloaded for the nonlinear track), down positive",
             },
         ),
         "track_stiffness": (
@@ -75,32 +76,56 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
             ("time", "dof"),
             out["q"],
             {
-                "units": "m or rad",
-                "long_name": "generalised displacement from static equilibrium",
-                "positive": "down",
+                "long_name": "generalised displacement from static equilibrium, down "
+                "positive (units per degree of freedom: dof_units)",
             },
         ),
-        "velocity": (("time", "dof"), out["v"], {"units": "m/s or rad/s"}),
-        "acceleration": (("time", "dof"), out["a"], {"units": "m/s^2 or rad/s^2"}),
+        "velocity": (
+            ("time", "dof"),
+            out["v"],
+            {"long_name": "generalised velocity (units per degree of freedom: dof_units/s)"},
+        ),
+        "acceleration": (
+            ("time", "dof"),
+            out["a"],
+            {"long_name": "generalised acceleration (units: dof_units/s^2)"},
+        ),
     }
     coords = {
-        "time": ("time", time, {"units": "s"}),
+        "time": ("time", time, {"units": "s", "long_name": "time from the start of the run"}),
         "distance": ("time", centre, {"units": "m", "long_name": "vehicle centre position"}),
-        "contact": list(model.contact_names),
+        "contact": ("contact", list(model.contact_names), {"long_name": "wheel contact"}),
         "contact_offset": (
             "contact",
             [float(np.mean(a)) for a in model.contact_axles],
             {"units": "m", "long_name": "contact position ahead of the vehicle centre"},
         ),
-        "contact_rail": ("contact", list(model.contact_rails)),
-        "suspension": list(model.suspension_names),
-        "wedge": list(model.wedge_names),
-        "dof": dofs,
+        "contact_rail": (
+            "contact",
+            list(model.contact_rails),
+            {"long_name": "rail of the contact"},
+        ),
+        "suspension": (
+            "suspension",
+            list(model.suspension_names),
+            {"long_name": "secondary suspension"},
+        ),
+        "wedge": ("wedge", list(model.wedge_names), {"long_name": "friction wedge"}),
+        "dof": ("dof", dofs, {"long_name": "degree of freedom"}),
+        "dof_units": (
+            "dof",
+            ["m" if d.endswith("bounce") else "rad" for d in dofs],
+            {"long_name": "unit of the degree of freedom's displacement"},
+        ),
     }
     sides = [s for s in dict.fromkeys(model.contact_sides) if s]
     if sides:
-        coords["contact_side"] = ("contact", list(model.contact_sides))
-        coords["side"] = sides
+        coords["contact_side"] = (
+            "contact",
+            list(model.contact_sides),
+            {"long_name": "bogie side of the contact"},
+        )
+        coords["side"] = ("side", sides, {"long_name": "bogie side"})
         load = xr.DataArray(
             out["wl"], dims=("time", "contact"), coords={"contact_side": coords["contact_side"]}
         )
@@ -112,7 +137,12 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
         )
     for name, units in BODY_MOTIONS.items():
         if name in dofs:
-            data[f"{name}_acceleration"] = ("time", out["a"][:, dofs.index(name)], {"units": units})
+            motion = name.replace("_", " ")
+            data[f"{name}_acceleration"] = (
+                "time",
+                out["a"][:, dofs.index(name)],
+                {"units": units, "long_name": f"{motion} acceleration"},
+            )
     return xr.Dataset(
         data,
         coords=coords,

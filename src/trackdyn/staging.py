@@ -3,7 +3,12 @@
 A command writes into a hidden staging folder inside its output folder; only when every
 file is written are they moved into place, replacing the files of the command's previous
 run there. A manifest (`MANIFEST`) names the command and its files, so a folder holding
-another command's outputs is refused unless ``overwrite`` is given.
+another command's outputs is refused unless ``overwrite`` is given. With a `Record` the
+folder also gets `SUMMARY` (``summary.json``): the trackdyn version, the command line, the
+options, the inputs with their SHA-256, the headline figures, how long the run took and the
+files; and ``report.html``, all of it with the tables and figures in one page
+(`trackdyn.report`); netCDF files written into the folder take their provenance from the same record
+(`trackdyn.netcdf`).
 
 An interrupt (Ctrl-C, SIGTERM) ends the process at once with exit code 130: staging
 folders and output folders this process created are removed, child processes (local Dask
@@ -14,24 +19,131 @@ left by a process killed outright (SIGKILL) is removed by the next command writi
 
 from __future__ import annotations
 
+import hashlib
 import json
+import math
 import os
 import shutil
 import signal
+import sys
 import tempfile
+import time
 from contextlib import contextmanager
+from dataclasses import dataclass, field
 from pathlib import Path
-
-from trackdyn.errors import TrackdynInputError
 
 MANIFEST = ".trackdyn.json"
 """File in an output folder naming the command that wrote it and its files."""
+
+SUMMARY = "summary.json"
+"""File in an output folder describing the run (with a `Record`)."""
 
 EXIT_INTERRUPTED = 130
 """Exit code after an interrupt (128 + SIGINT), as shells report it."""
 
 _cleanup: list[Path] = []  # staging folders and created output folders, newest last
 _state = {"committing": False, "pending": False}
+_records: dict[Path, Record] = {}  # staging folder -> the record of its run
+
+
+@dataclass
+class Record:
+    """What a command ran on and found: written to ``summary.json`` and the netCDF files.
+
+    Parameters
+    ----------
+    title : str
+        One line saying what the outputs are.
+    inputs : dict
+        Input files by role (``scenario``, ``geometry``, ...); None for the built-in example.
+    options : dict
+        The options the command ran with (flat, values numbers or text).
+    vehicle : dict
+        Vehicle parameters by name [SI units], where a vehicle was run.
+    command_line : str
+        The command as typed; default the process's arguments when it is the ``trackdyn``
+        command, else ``trackdyn <command> (called from Python)``.
+    headline : dict
+        The main results (filled by the command before its folder is committed), names with
+        their units (``dyn_load_max_kN``).
+    timings : dict
+        How long parts of the run took [s]; kept out of the netCDF files.
+    """
+
+    title: str
+    inputs: dict = field(default_factory=dict)
+    options: dict = field(default_factory=dict)
+    vehicle: dict = field(default_factory=dict)
+    headline: dict = field(default_factory=dict)
+    timings: dict = field(default_factory=dict)
+    _digests: dict = field(default_factory=dict, repr=False)
+    command_line: str = ""
+
+    def input_digests(self) -> dict[str, tuple[str, str]]:
+        """Path and SHA-256 of each input file given (the built-in example: its name)."""
+        for name, path in self.inputs.items():
+            if name not in self._digests:
+                digest = "" if path is None else _sha256(path)
+                self._digests[name] = ("built-in example" if path is None else str(path), digest)
+        return dict(self._digests)
+
+    def lines(self) -> list[str]:
+        """The inputs with their SHA-256 and the timings, one line each, for a reader."""
+        found = [f"input {k}: {p} {d}".rstrip() for k, (p, d) in self.input_digests().items()]
+        return found + [f"time {k}: {v:.3g} s" for k, v in self.timings.items()]
+
+    def summary(self, command: str, files: list[str]) -> dict:
+        """The content of ``summary.json``."""
+        from trackdyn import __version__
+
+        digests = self.input_digests()
+        return {
+            "trackdyn_version": __version__,
+            "command": command,
+            "command_line": self.command_line,
+            "title": self.title,
+            "inputs": {k: {"path": p, "sha256": d} for k, (p, d) in digests.items()},
+            "options": self.options,
+            "vehicle": self.vehicle,
+            "headline": self.headline,
+            "timings_s": self.timings,
+            "files": files,
+        }
+
+
+def _sha256(path) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as file:
+        for block in iter(lambda: file.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def _json(value):
+    """``value`` as JSON takes it: numpy numbers as Python's, NaN and infinity (a tonnage
+    never reached) as null, anything else unknown as text."""
+    if isinstance(value, dict):
+        return {str(k): _json(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_json(v) for v in value]
+    if isinstance(value, bool) or value is None or isinstance(value, str):
+        return value
+    if hasattr(value, "item"):  # numpy scalar
+        value = value.item()
+    if isinstance(value, int | float):
+        return value if isinstance(value, int) or math.isfinite(value) else None
+    return str(value)
+
+
+def _command_line(command: str) -> str:
+    if Path(sys.argv[0]).name in ("trackdyn", "__main__.py") and command in sys.argv:
+        return " ".join(["trackdyn", *sys.argv[1:]])
+    return f"trackdyn {command} (called from Python)"
+
+
+def record_of(path) -> Record | None:
+    """The record of the output folder whose staging folder holds ``path`` (None: none)."""
+    return _records.get(Path(path).parent)
 
 
 def _remove_and_exit() -> None:
@@ -73,7 +185,9 @@ def _manifest(out: Path) -> dict:
 
 
 @contextmanager
-def output_folder(out, command: str, overwrite: bool = False):
+def output_folder(
+    out, command: str, overwrite: bool = False, record: Record | None = None, flag: str = "--out"
+):
     """Yield a staging folder; on success its files replace the command's files in ``out``.
 
     Parameters
@@ -84,17 +198,25 @@ def output_folder(out, command: str, overwrite: bool = False):
         The command writing it (``run``, ``study``, ...), recorded in the manifest.
     overwrite : bool
         Replace the outputs of another command found in ``out``.
+    record : Record, optional
+        The run's provenance: ``summary.json`` is written from it, netCDF files written into
+        the staging folder carry it.
+    flag : str
+        The command-line option that names the folder, for messages.
     """
+    from trackdyn.errors import TrackdynInputError
+
+    started = time.perf_counter()
     if not str(out).strip():
-        raise TrackdynInputError("--out is empty: name an output folder")
+        raise TrackdynInputError(f"{flag} is empty: name an output folder")
     out = Path(out)
     if out.exists() and not out.is_dir():
-        raise TrackdynInputError(f"--out {out}: exists and is not a folder")
+        raise TrackdynInputError(f"{flag} {out}: exists and is not a folder")
     previous = _manifest(out) if out.is_dir() else {}
     other = previous.get("command")
     if other and other != command and not overwrite:
         raise TrackdynInputError(
-            f"--out {out}: holds the outputs of 'trackdyn {other}'; choose another folder "
+            f"{flag} {out}: holds the outputs of 'trackdyn {other}'; choose another folder "
             "or give --overwrite"
         )
     created = not out.exists()
@@ -103,12 +225,24 @@ def output_folder(out, command: str, overwrite: bool = False):
         _remove_stale_stages(out)
         stage = Path(tempfile.mkdtemp(prefix=f".staging-{os.getpid()}-", dir=out))
     except OSError as exc:
-        raise TrackdynInputError(f"--out {out}: cannot write there ({exc.strerror})") from None
+        raise TrackdynInputError(f"{flag} {out}: cannot write there ({exc.strerror})") from None
     if created:
         _cleanup.append(out)
     _cleanup.append(stage)
+    if record is not None:
+        record.command_line = record.command_line or _command_line(command)
+        _records[stage] = record
     try:
         yield stage
+        if record is not None:
+            from trackdyn.report import REPORT, render
+
+            files = sorted([p.name for p in stage.iterdir()] + [SUMMARY, REPORT])
+            record.timings["total"] = time.perf_counter() - started
+            summary = record.summary(command, files)
+            text = json.dumps(_json(summary), indent=2, allow_nan=False)
+            (stage / SUMMARY).write_text(text + "\n")
+            (stage / REPORT).write_text(render(summary, stage), encoding="utf-8")
         _commit(out, stage, command, previous)
     except BaseException:
         shutil.rmtree(stage, ignore_errors=True)
@@ -117,6 +251,7 @@ def output_folder(out, command: str, overwrite: bool = False):
         raise
     finally:
         _cleanup[:] = [p for p in _cleanup if p not in (out, stage)]
+        _records.pop(stage, None)
 
 
 def _remove_stale_stages(out: Path) -> None:

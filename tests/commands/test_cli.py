@@ -1,15 +1,17 @@
 """The command line: outputs of each command (bad input: test_bad_input.py)."""
 
+import json
+
 import numpy as np
 import pandas as pd
 import pytest
-import xarray as xr
 from rich.console import Console
 from typer.testing import CliRunner
 
 from trackdyn.cli import app
-from trackdyn.commands.tables import frame_table, header
+from trackdyn.commands.tables import deterioration_table, frame_table, header
 from trackdyn.io import write_geometry, write_supports
+from trackdyn.netcdf import read_netcdf
 from trackdyn.track.synthetic import synthetic_track
 from trackdyn.vehicle.parameters import load_vehicle
 
@@ -67,12 +69,14 @@ def test_track_command_on_user_files(short_track, tmp_path):
     assert result.exit_code == 0, result.output
     names = {p.name for p in out.iterdir()} - {".trackdyn.json"}
     assert names == {
+        "summary.json",
+        "report.html",
         "track.nc",
         "track_overview.png",
         "load_deflection.png",
         "deflection_basin.png",
     }
-    ds = xr.load_dataset(out / "track.nc")
+    ds = read_netcdf(out / "track.nc")
     assert ds.k2.attrs["units"] == "N/m" and ds.k2.shape == (2, 500)  # 300 m / 0.6 m
     # loaded = unloaded + ys, 127.5 kN default wheel load
     ys_on_grid = np.interp(ds.distance, ds.sleeper_distance, ds.ys.sel(rail="left"))
@@ -96,13 +100,16 @@ def test_run_command_with_scenario(short_track, tmp_path):
     result = runner.invoke(app, ["run", str(scenario), "--out", str(out)])
     assert result.exit_code == 0, result.output
     assert {p.name for p in out.iterdir()} - {".trackdyn.json"} == {
+        "summary.json",
+        "report.html",
         "results.nc",
         "summary.csv",
         "wheel_loads.png",
+        "wheel_load_exceedance.png",
         "secondary_displacement.png",
         "wedge_friction.png",
     }
-    ds = xr.load_dataset(out / "results.nc")
+    ds = read_netcdf(out / "results.nc")
     assert list(ds.contact.values) == ["FL", "FR", "BL", "BR"]
     assert ds.attrs["model"] == "7dof" and ds.attrs["vehicle"].startswith("empty")
     # rear axle from 20 m, front axle to 250 m: the centre covers 250 - 20 - axle span,
@@ -194,3 +201,66 @@ def test_a_staging_folder_of_a_killed_process_is_removed_by_the_next_run(tmp_pat
         (stage / "results.nc").write_text("whole")
     names = sorted(p.name for p in out.iterdir())
     assert names == [f".staging-{os.getppid()}-def", ".trackdyn.json", "results.nc"]
+
+
+def test_results_on_stdout_progress_and_status_on_stderr(short_track, tmp_path):
+    scenario = tmp_path / "s.toml"
+    scenario.write_text(
+        f'[track]\ngeometry = "{short_track / "geometry.csv"}"\n'
+        f'supports = "{short_track / "supports.csv"}"\n[run]\nmodel = "2dof"\n'
+    )
+    args = ["run", str(scenario), "--out", str(tmp_path / "out")]
+    normal = runner.invoke(app, args)
+    assert normal.exit_code == 0, normal.output
+    assert "ΔP max" in normal.stdout and "wrote" not in normal.stdout
+    assert "wrote results.nc" in normal.stderr
+    quiet = runner.invoke(app, ["-q", *args])
+    assert quiet.exit_code == 0 and quiet.stderr == "" and "ΔP max" in quiet.stdout
+    verbose = runner.invoke(app, ["-v", *args])
+    digest = json.loads((tmp_path / "out" / "summary.json").read_text())["inputs"]
+    assert f"input geometry: {short_track / 'geometry.csv'} {digest['geometry']['sha256']}" in (
+        verbose.stderr
+    )
+    assert "time total:" in verbose.stderr and "ΔP max" in verbose.stdout
+
+
+def test_short_help_option_and_bare_command():
+    assert runner.invoke(app, ["-h"]).exit_code == 0
+    bare = runner.invoke(app, [])
+    assert bare.exit_code == 0 and "Commands" in bare.stdout
+
+
+def test_deterioration_table_writes_never_for_no_trigger():
+    row = dict(section="a", mgt=50.0, steps=3, settlement_min_mm=1.0, settlement_mean_mm=2.0,
+               settlement_max_mm=3.0, d1_sd_max_initial_mm=1.0, d1_sd_max_final_mm=1.2,
+               first_trigger_mgt=np.inf)  # fmt: skip
+    console = Console(width=120, record=True)
+    console.print(deterioration_table(pd.DataFrame([row]), "x"))
+    text = console.export_text()
+    assert "never" in text and "inf" not in text and "trigger [MGT]" in text
+
+
+def test_help_lists_models_presets_and_keys():
+    from trackdyn.options import RunOptions
+    from trackdyn.vehicle.models import MODELS
+    from trackdyn.vehicle.parameters import PRESETS
+
+    text = " ".join(runner.invoke(app, ["run", "-h"]).stdout.split())  # lines joined
+    assert f"Models: {', '.join(MODELS)}." in text
+    presets = [p.name.removesuffix(".toml") for p in PRESETS.iterdir()]
+    assert all(p in text for p in presets)
+    assert f"[run] {', '.join(RunOptions.model_fields)}" in text
+
+
+@pytest.mark.slow
+def test_the_cli_starts_without_numpy_or_rich():
+    """`trackdyn --version` imports neither (benchmarks/cli.py times it)."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys; from trackdyn.cli import app; "
+        "print(sorted({'numpy', 'rich', 'scipy', 'pandas'} & set(sys.modules)))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"

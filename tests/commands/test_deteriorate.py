@@ -53,7 +53,7 @@ def test_deteriorate_writes_dataset_tables_and_figures(folder, tmp_path):
     out = tmp_path / "out"
     result = runner.invoke(app, ["deteriorate", str(folder / "scenario.toml"), "--out", str(out)])
     assert result.exit_code == 0, result.output
-    assert {p.name for p in out.iterdir()} - {".trackdyn.json"} == {
+    assert {p.name for p in out.iterdir()} - {".trackdyn.json", "summary.json", "report.html"} == {
         "deterioration_geometry.nc",
         "settlement_geometry.csv",
         "geometry_geometry.png",

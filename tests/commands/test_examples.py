@@ -1,14 +1,20 @@
-"""The shipped example files are valid and expand as their tables say."""
+"""The shipped examples: written by `trackdyn example`, valid, and (slow) runnable."""
 
-from pathlib import Path
+from importlib.resources import files
 
 import pytest
+from typer.testing import CliRunner
 
+from trackdyn.cli import app
 from trackdyn.commands.calibrate.spec import load_calibration
+from trackdyn.commands.deteriorate.scenario import load_deterioration
+from trackdyn.commands.deteriorate.sections import section_tasks
+from trackdyn.commands.examples import EXAMPLES
+from trackdyn.commands.run import load_scenario
 from trackdyn.commands.study import load_study
 from trackdyn.studies.scenarios import tasks
 
-EXAMPLES = Path(__file__).parents[2] / "examples"
+runner = CliRunner()
 
 
 def expected_runs(study) -> int:
@@ -22,14 +28,63 @@ def expected_runs(study) -> int:
     return len(s.factors) ** len(s.parameters) if s.grid else 1 + len(s.parameters) * len(s.factors)
 
 
+def written(name, tmp_path):
+    """The folder `trackdyn example NAME --to` wrote, after checking its files."""
+    to = tmp_path / name
+    result = runner.invoke(app, ["example", name, "--to", str(to)])
+    assert result.exit_code == 0, result.output
+    assert {p.name for p in to.iterdir()} - {".trackdyn.json"} == set(EXAMPLES[name][1])
+    assert result.stdout.startswith("trackdyn ")  # the command that runs it
+    return to
+
+
+def test_every_shipped_file_is_in_an_example():
+    package = files("trackdyn")
+    shipped = {
+        f"examples/{p.name}" for p in package.joinpath("examples").iterdir() if p.is_file()
+    } | {
+        f"examples/calibration/{p.name}" for p in package.joinpath("examples/calibration").iterdir()
+    }
+    used = {source for _, sources, _ in EXAMPLES.values() for source in sources.values()}
+    assert shipped <= used
+    assert all(package.joinpath(source).is_file() for source in used)
+
+
 @pytest.mark.parametrize("name", ["matrix-2dof.toml", "sensitivity.toml", "speed.toml"])
-def test_study_examples_expand_as_their_tables_say(name):
-    study, base = load_study(EXAMPLES / name)
+def test_study_examples_expand_as_their_tables_say(name, tmp_path):
+    study, base = load_study(written("study", tmp_path) / name)
     runs = tasks(study, base)
     assert len(runs) == expected_runs(study)
     assert {r.run.model for r in runs} == {study.run.model}
 
 
-def test_calibration_example_is_valid():
-    spec, _ = load_calibration(EXAMPLES / "calibration" / "calibration.toml")
-    assert len(spec.survey) >= 2 and spec.fit.parameters
+def test_run_deteriorate_and_calibration_examples_are_valid(tmp_path):
+    spec, base = load_scenario(written("run", tmp_path) / "run.toml")
+    assert spec.track.geometry is not None and spec.vehicle.load(base).name.startswith("loaded")
+    for name, toml, sections in (
+        ("deteriorate", "deteriorate.toml", 1),
+        ("sections", "sections.toml", 2),
+    ):
+        spec, base = load_deterioration(written(name, tmp_path) / toml)
+        assert len(section_tasks(spec, base)) == sections
+    spec, _ = load_calibration(written("calibration", tmp_path) / "calibration.toml")
+    assert len(spec.survey) == 3 and spec.fit.parameters
+
+
+def test_listing_and_unknown_example(tmp_path):
+    listing = runner.invoke(app, ["example"])
+    assert listing.exit_code == 0 and all(name in listing.stdout for name in EXAMPLES)
+    result = runner.invoke(app, ["example", "bridge", "--to", str(tmp_path / "x")])
+    assert result.exit_code == 2 and "unknown example 'bridge'" in result.stderr
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(EXAMPLES))
+def test_every_example_runs_as_its_command_says(name, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    command = runner.invoke(app, ["example", name, "--to", "ex"]).stdout.split()
+    assert command[0] == "trackdyn"
+    serial = ["--workers", "1"] if command[1] != "run" else []
+    result = runner.invoke(app, ["-q", *command[1:], *serial])
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / command[-1] / ".trackdyn.json").is_file()

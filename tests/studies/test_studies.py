@@ -127,7 +127,7 @@ def test_study_command(files, tmp_path):
     out = tmp_path / "out"
     result = CliRunner().invoke(app, ["study", str(study), "--out", str(out), "--workers", "1"])
     assert result.exit_code == 0, result.output
-    assert {p.name for p in out.iterdir()} - {".trackdyn.json"} == {
+    assert {p.name for p in out.iterdir()} - {".trackdyn.json", "summary.json", "report.html"} == {
         "study.nc",
         "study.csv",
         "speed_sweep.png",
@@ -148,7 +148,7 @@ def test_sensitivity_study_whose_varied_runs_all_fail(files, tmp_path):
     out = tmp_path / "out"
     result = CliRunner().invoke(app, ["study", str(study), "--out", str(out), "--workers", "1"])
     assert result.exit_code == 0, result.output
-    assert "failed (parameter=mu, factor=10.0): vehicle parameter mu is 2.5" in result.stdout
+    assert "failed (parameter=mu, factor=10.0): vehicle parameter mu is 2.5" in result.stderr
     assert {"study.csv", "tornado.png", "spectra.png"} <= {p.name for p in out.iterdir()}
     table = pd.read_csv(out / "study.csv", keep_default_na=False)
     assert list(table["error"] == "") == [True, False]

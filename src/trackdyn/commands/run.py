@@ -22,9 +22,10 @@ from pathlib import Path
 from trackdyn.commands import plots
 from trackdyn.commands.tables import frame_table
 from trackdyn.errors import named
-from trackdyn.io import write_netcdf
+from trackdyn.netcdf import write_netcdf
 from trackdyn.options import RunOptions, Strict, TrackSpec, VehicleSpec, load_toml
-from trackdyn.staging import output_folder
+from trackdyn.progress import note, status
+from trackdyn.staging import Record, output_folder
 
 
 class Scenario(Strict):
@@ -46,8 +47,72 @@ def load_scenario(path=None) -> tuple[Scenario, Path]:
     return load_toml(Scenario, path)
 
 
+def scenario_record(title: str, scenario, spec, base: Path, role: str = "scenario") -> Record:
+    """The record of a run scenario's command: its files, run options and vehicle source.
+
+    Parameters
+    ----------
+    title : str
+        What the outputs are.
+    scenario : path, optional
+        The scenario file (None: the built-in example).
+    spec : Scenario or Study
+        The file read, with ``[vehicle]``, ``[track]`` and ``[run]``.
+    base : Path
+        The folder its relative paths start from.
+    role : str
+        What the file is called in the record (``scenario``, ``study``).
+    """
+    geometry, supports = spec.track.paths(base)
+    inputs = {role: scenario, "geometry": geometry, "supports": supports}
+    source = spec.vehicle.source(base)
+    if isinstance(source, Path):
+        inputs["vehicle"] = source
+    options = {f"run_{k}": v for k, v in spec.run.model_dump().items()}
+    options["vehicle_source"] = str(source)
+    options.update({f"vehicle_override_{k}": v for k, v in spec.vehicle.overrides.items()})
+    return Record(title, inputs, options)
+
+
+def headline(table) -> dict:
+    """Run-wide extremes of a run's summary table (`trackdyn.results.summary`)."""
+    return {
+        "dyn_load_max_kN": float(table["dyn_load_max_kN"].max()),
+        "dyn_load_min_kN": float(table["dyn_load_min_kN"].min()),
+        "dyn_load_sd_max_kN": float(table["dyn_load_sd_kN"].max()),
+        "secondary_max_mm": float(table["secondary_max_mm"].iloc[0]),
+        "body_bounce_acc_rms_m_per_s2": float(table["body_bounce_acc_rms_m_per_s2"].iloc[0]),
+    }
+
+
+def write_run_figures(ds, spec: Scenario, folder: Path) -> None:
+    """Draw a run's figures into ``folder``: wheel loads, their exceedance, secondary
+    displacement and, with friction wedges, wedge friction.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The run.
+    spec : Scenario
+        Its scenario (δ, and whether the track is the built-in example, whose soft spot,
+        voids and structure are marked).
+    folder : Path
+        Output folder.
+    """
+    marks = plots.example_marks() if spec.track.geometry is None else []
+    delta = spec.run.delta
+    figures = {
+        "wheel_loads.png": plots.plot_wheel_loads(ds, delta, marks),
+        "wheel_load_exceedance.png": plots.plot_wheel_load_exceedance(ds, delta),
+        "secondary_displacement.png": plots.plot_secondary(ds, marks),
+        "wedge_friction.png": plots.plot_wedge_friction(ds),
+    }
+    for name, fig in figures.items():
+        plots.save(fig, folder / name)
+
+
 def run(scenario, out, overwrite: bool, console) -> None:
-    """Simulate the scenario; write results.nc, summary.csv and three figures into ``out``.
+    """Simulate the scenario; write results.nc, summary.csv, summary.json and four figures.
 
     Parameters
     ----------
@@ -58,7 +123,7 @@ def run(scenario, out, overwrite: bool, console) -> None:
     overwrite : bool
         Replace another command's outputs in ``out``.
     console : rich.console.Console
-        Where progress and the summary table are shown.
+        Where the summary table is shown (stdout); progress goes to stderr.
     """
     from trackdyn.results import summary
     from trackdyn.simulation import simulate
@@ -66,18 +131,21 @@ def run(scenario, out, overwrite: bool, console) -> None:
     spec, base = load_scenario(scenario)
     with named(scenario):
         vehicle = spec.vehicle.load(base)
-    with output_folder(out, "run", overwrite) as stage:
-        with console.status("reading the track"):
+    title = f"trackdyn run: {spec.run.model}, {vehicle.name}, {spec.run.speed_kmh:g} km/h"
+    record = scenario_record(title, scenario, spec, base)
+    record.vehicle = vehicle.as_dict()
+    with output_folder(out, "run", overwrite, record) as stage:
+        with status("reading the track"):
             trk = spec.track.load(base)
         with named(scenario):
             ds = simulate(vehicle, trk, spec.run, progress=True)
         table = summary(ds)
+        record.headline = headline(table)
         write_netcdf(ds, stage / "results.nc")
         table.to_csv(stage / "summary.csv", index=False, float_format="%.4g")
-        plots.wheel_loads(ds, stage / "wheel_loads.png")
-        plots.secondary(ds, stage / "secondary_displacement.png")
-        plots.wedge_friction(ds, stage / "wedge_friction.png")
+        write_run_figures(ds, spec, stage)
     console.print(
         frame_table(table, f"{ds.attrs['model']}: {vehicle.name}, {spec.run.speed_kmh:g} km/h")
     )
-    console.print(f"wrote results.nc, summary.csv and 3 figures to {out}")
+    note(f"wrote results.nc, summary.csv, summary.json and 4 figures to {out}")
+    note("\n".join(record.lines()), 2)

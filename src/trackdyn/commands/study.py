@@ -4,11 +4,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from trackdyn.commands import plots
+from trackdyn.commands.run import scenario_record
 from trackdyn.commands.tables import frame_table
 from trackdyn.errors import TrackdynInputError, named
-from trackdyn.io import write_netcdf
+from trackdyn.netcdf import write_netcdf
 from trackdyn.options import RunOptions, load_toml
+from trackdyn.progress import note
 from trackdyn.staging import output_folder
 from trackdyn.studies.scenarios import Study
 
@@ -33,7 +37,7 @@ def load_study(path=None) -> tuple[Study, Path]:
     return spec, base
 
 
-def write_study(table, ds, study, folder) -> list[str]:
+def write_study(table, ds, study, folder, sleeper_spacing=None) -> list[str]:
     """Write ``study.nc``, ``study.csv`` and the figures into ``folder``; return the names.
 
     A matrix study draws ``study_cases.png``, a one-at-a-time sensitivity study
@@ -50,23 +54,29 @@ def write_study(table, ds, study, folder) -> list[str]:
         The study (its ``kind``).
     folder : Path
         Output folder.
+    sleeper_spacing : float, optional
+        Sleeper spacing of the track, for the sleeper-passing frequency [m].
     """
+    from trackdyn.track.spectra import WAVELENGTH_RANGE
+
     write_netcdf(ds, folder / "study.nc")
     table.to_csv(folder / "study.csv", index=False, float_format="%.4g")
     names = ["study.nc", "study.csv"]
     if not (table["error"] == "").any():
         return names
     figures = {
-        "matrix": ("study_cases.png", plots.study_matrix),
-        "speed": ("speed_sweep.png", plots.speed_sweep),
+        "matrix": ("study_cases.png", plots.plot_study_matrix),
+        "speed": ("speed_sweep.png", plots.plot_speed_sweep),
     }
     if not study.sensitivity.grid:
-        figures["sensitivity"] = ("tornado.png", plots.tornado)
+        figures["sensitivity"] = ("tornado.png", plots.plot_tornado)
     if study.kind in figures:
         name, draw = figures[study.kind]
-        draw(table, folder / name)
+        plots.save(draw(table), folder / name)
         names.append(name)
-    plots.spectra(table, ds, folder / "spectra.png")
+    synthetic = WAVELENGTH_RANGE[0] if study.track.geometry is None else None
+    fig = plots.plot_spectra(table, ds, study.run.speed_kmh, sleeper_spacing, synthetic)
+    plots.save(fig, folder / "spectra.png")
     return [*names, "spectra.png"]
 
 
@@ -86,23 +96,35 @@ def study(study_file, out, overwrite: bool, workers, scheduler, console) -> None
     scheduler : str, optional
         Address of a running Dask scheduler.
     console : rich.console.Console
-        Where the table and failed runs are shown.
+        Where the table is shown (stdout); failed runs and progress go to stderr.
     """
     from trackdyn.studies.runner import gather, run_study
     from trackdyn.studies.scenarios import tasks
 
     spec, base = load_study(study_file)
     with named(study_file):
-        spec.track.load(base)  # a bad track file is refused before any run
+        track = spec.track.load(base)  # a bad track file is refused before any run
         runs = tasks(spec, base)
-    with output_folder(out, "study", overwrite) as stage:
+    title = f"trackdyn study: {spec.kind} study, {spec.run.model}, {len(runs)} runs"
+    record = scenario_record(title, study_file, spec, base, role="study")
+    record.options.update({"kind": spec.kind, spec.kind: spec.model_dump(mode="json")[spec.kind]})
+    with output_folder(out, "study", overwrite, record) as stage:
         results = run_study(runs, workers=workers, scheduler=scheduler, progress=True)
         table, ds = gather(results)
         ds.attrs.update(kind=spec.kind, model=spec.run.model)
-        write_study(table, ds, spec, stage)
+        ok = table[table["error"] == ""]
+        record.headline = {
+            "runs": len(table),
+            "failed_runs": len(table) - len(ok),
+            "dyn_load_max_kN": float(ok["dyn_load_max_kN"].max()) if len(ok) else None,
+            "dyn_load_sd_max_kN": float(ok["dyn_load_sd_kN"].max()) if len(ok) else None,
+        }
+        spacing = float(np.median(np.diff(track.supports.position)))
+        write_study(table, ds, spec, stage, spacing)
     title = f"{spec.kind} study, {spec.run.model}: {len(runs)} runs"
     console.print(frame_table(table.drop(columns="error"), title))
     for _, row in table[table["error"] != ""].iterrows():
         labels = ", ".join(f"{c}={row[c]}" for c in runs[0].labels)
-        console.print(f"[red]failed[/red] ({labels}): {row['error']}")
-    console.print(f"wrote study.nc, study.csv and figures to {out}")
+        note(f"failed ({labels}): {row['error']}", 0)
+    note(f"wrote study.nc, study.csv, summary.json and figures to {out}")
+    note("\n".join(record.lines()), 2)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 from rich import box
 from rich.table import Table
 from rich.text import Text
@@ -105,7 +107,7 @@ def deterioration_table(table, title: str) -> Table:
             str(r.steps),
             f"{r.settlement_min_mm:.2f} / {r.settlement_mean_mm:.2f} / {r.settlement_max_mm:.2f}",
             f"{r.d1_sd_max_initial_mm:.2f} -> {r.d1_sd_max_final_mm:.2f}",
-            f"{r.first_trigger_mgt:.3g}",
+            "never" if math.isinf(r.first_trigger_mgt) else f"{r.first_trigger_mgt:.3g}",
         )
     return show
 
@@ -122,7 +124,7 @@ def alignment_table(spec, problem) -> Table:
     """
     show = Table(title="Surveys aligned to the first (D1-band cross-correlation)")
     for col in ("survey", "MGT", "role", "shift [m]", "correlation"):
-        show.add_column(col)
+        show.add_column(Text(col))  # Text: "[m]" is not rich markup
     for s, a, used in zip(spec.survey, problem.alignments, problem.fitted, strict=True):
         role = "first" if s is spec.survey[0] else "fit" if used else "check"
         show.add_row(s.geometry.name, f"{s.mgt:g}", role, f"{a.shift:+.3f}", f"{a.correlation:.3f}")
@@ -145,7 +147,7 @@ def fitted_table(law: str, problem, result, units: dict) -> Table:
     """
     show = Table(title=f"Fitted {law} law ({result.runs} model runs)")
     for col in ("parameter", "start", "fitted", "standard error", "unit (SI)"):
-        show.add_column(col)
+        show.add_column(Text(col))
     for name, v0, v, se in zip(problem.names, result.start, result.values,
                                result.standard_errors, strict=True):  # fmt: skip
         show.add_row(name, f"{v0:.4g}", f"{v:.4g}", f"{se:.2g}", units[name])

@@ -18,9 +18,9 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
-import pandas as pd
 import xarray as xr
 
 from trackdyn.commands import plots
@@ -34,10 +34,11 @@ from trackdyn.io import (
     rail_rows,
     support_pieces,
     supports_of,
-    write_netcdf,
 )
 from trackdyn.limits import WHEEL_LOAD, check_within
-from trackdyn.staging import output_folder
+from trackdyn.netcdf import write_netcdf
+from trackdyn.progress import note, status
+from trackdyn.staging import Record, output_folder
 from trackdyn.track.analysis import (
     SEGMENT_M,
     curve_picks,
@@ -80,7 +81,8 @@ class _Rows:
 
     def __init__(self, pieces: Iterator, distance: Callable, take: Callable, concat: Callable):
         self._pieces, self._distance, self._take, self._concat = pieces, distance, take, concat
-        self.rows, self.done = None, False
+        self.rows: Any = None
+        self.done = False
 
     @property
     def distance(self) -> np.ndarray:
@@ -163,9 +165,10 @@ def track_pieces(
                 geo.rows = geo.up_to(max(last, geo.distance[0]))
         part = geo.rows if cut is None else geo.up_to(end)
         found = [r.rows if cut is None else r.up_to(end + PAD_M) for r in rails]
-        track = Track(Geometry(*part, str(geometry)), supports_of(found, supports))
+        distance, left, right = part
+        track = Track(Geometry(distance, left, right, str(geometry)), supports_of(found, supports))
         yield Piece(track, (lo, np.inf if cut is None else cut))
-        if cut is None:
+        if cut is None or x0 is None:  # x0 is None only with cut None
             return
         d = geo.distance
         start = d[_anchors(d, x0) & (d <= cut - margin)]
@@ -278,8 +281,8 @@ def _join(parts: list[xr.Dataset]) -> xr.Dataset:
     return xr.Dataset(variables, coords=coords, attrs=first.attrs)
 
 
-def write_track_outputs(ds: xr.Dataset, picks, basin, folder) -> pd.DataFrame:
-    """Write ``track.nc`` and the three track figures into ``folder``; return the summary.
+def write_track_outputs(ds: xr.Dataset, picks, basin, folder, marks=()) -> None:
+    """Write ``track.nc`` and the three track figures into ``folder``.
 
     Parameters
     ----------
@@ -292,13 +295,19 @@ def write_track_outputs(ds: xr.Dataset, picks, basin, folder) -> pd.DataFrame:
         Result of `trackdyn.track.analysis.voided_basin`.
     folder : Path
         Output folder.
+    marks : sequence of trackdyn.commands.plots.Mark
+        Stretches of track to mark on the overview (the example's features).
     """
+    from trackdyn.deterioration.loop import LoopOptions
+
     ps, delta = ds.attrs["static_wheel_load_N"], ds.attrs["delta"]
     write_netcdf(ds, folder / "track.nc")
-    plots.track_overview(ds, folder / "track_overview.png")
-    plots.load_deflection(picks, ps, delta, folder / "load_deflection.png")
-    plots.deflection_basin(*basin, ps, folder / "deflection_basin.png")
-    return summary_table(ds)
+    threshold = LoopOptions.model_fields["threshold_sd_mm"].default
+    plots.save(plots.plot_track_overview(ds, marks, threshold), folder / "track_overview.png")
+    plots.save(plots.plot_load_deflection(picks, ps, delta), folder / "load_deflection.png")
+    rail, x0, with_gap, without_gap = basin
+    fig = plots.plot_deflection_basin(rail, x0, with_gap, without_gap, ps)
+    plots.save(fig, folder / "deflection_basin.png")
 
 
 def track(
@@ -324,21 +333,34 @@ def track(
     overwrite : bool
         Replace another command's outputs in ``out``.
     console : rich.console.Console
-        Where progress and the summary table are shown.
+        Where the summary table is shown (stdout); progress goes to stderr.
     """
     from trackdyn.data import EXAMPLE_GEOMETRY, EXAMPLE_SUPPORTS, example_path
 
     check_within(wheel_load_kN * 1e3, *WHEEL_LOAD, "--wheel-load-kN", "kN", 1e3)
     if (geometry is None) != (supports is None):
         raise TrackdynInputError("give both --geometry and --supports, or neither for the example")
-    if geometry is None:
+    given = geometry is not None
+    if not given:
         geometry, supports = example_path(EXAMPLE_GEOMETRY), example_path(EXAMPLE_SUPPORTS)
     section = rail_section(rail)
-    with output_folder(out, "track", overwrite) as stage:
-        with console.status("reading and linearising the track, piece by piece"):
+    record = Record(
+        f"trackdyn track: linearised track at Ps = {wheel_load_kN:g} kN, delta = {delta:g}",
+        {"geometry": geometry if given else None, "supports": supports if given else None},
+        {"wheel_load_kN": wheel_load_kN, "delta": delta, "rail": rail, "extrapolate": extrapolate},
+    )
+    with output_folder(out, "track", overwrite, record) as stage:
+        with status("reading and linearising the track, piece by piece"):
             ds, picks, basin = analyse_pieces(
                 geometry, supports, wheel_load_kN * 1e3, delta, section, extrapolate=extrapolate
             )
-        table = write_track_outputs(ds, picks, basin, stage)
+        table = summary_table(ds)
+        record.headline = {
+            f"{col}_{rail}": float(value)
+            for rail, row in table.set_index("rail").iterrows()
+            for col, value in row.items()
+        }
+        write_track_outputs(ds, picks, basin, stage, [] if given else plots.example_marks())
     console.print(frame_table(table, f"Track summary ({ds.attrs['geometry_source']})"))
-    console.print(f"wrote track.nc and 3 figures to {out}")
+    note(f"wrote track.nc, summary.json and 3 figures to {out}")
+    note("\n".join(record.lines()), 2)

@@ -132,12 +132,17 @@ def _harmonic_sum(x: np.ndarray, w: np.ndarray, amp: np.ndarray, phase: np.ndarr
     return np.concatenate(parts)[: x.size]
 
 
+WAVELENGTH_RANGE = (1.524, 304.8)
+"""Shortest and longest wavelength of a synthetic profile [m]: the FRA spectra's stated
+validity (5 to 1000 ft)."""
+
+
 def generate_profile(
     distance,
     spectrum: str | TrackSpectrum,
     *,
     seed=None,
-    wavelength_range: tuple[float, float] = (1.524, 304.8),
+    wavelength_range: tuple[float, float] = WAVELENGTH_RANGE,
     n_harmonics: int = 2000,
 ) -> np.ndarray:
     """Synthetic vertical profile as a sum of harmonics with random phases.

@@ -12,7 +12,7 @@ import dataclasses
 
 from trackdyn.commands.tables import deterioration_table
 from trackdyn.errors import require_workers
-from trackdyn.staging import output_folder
+from trackdyn.staging import Record, output_folder
 
 
 def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> None:
@@ -44,8 +44,11 @@ def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> 
     serial = scheduler is None and (workers == 1 or (workers is None and len(tasks) == 1))
     if serial:
         tasks = [dataclasses.replace(t, progress=True) for t in tasks]
-    with output_folder(out, "deteriorate", overwrite) as stage:
+    title = f"trackdyn deteriorate: {spec.run.model}, {len(tasks)} section(s)"
+    record = Record(title, {"scenario": scenario}, spec.model_dump(mode="json"))
+    with output_folder(out, "deteriorate", overwrite, record) as stage:
         datasets = run_sections(tasks, workers=workers, scheduler=scheduler, progress=not serial)
+        record.headline = {"sections": summary(datasets).to_dict(orient="records")}
         files = write_outputs(datasets, stage)
     title = f"Deterioration, {spec.run.model}: {len(datasets)} section(s)"
     console.print(deterioration_table(summary(datasets), title))

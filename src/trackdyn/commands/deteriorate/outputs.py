@@ -12,7 +12,7 @@ from trackdyn.commands.deteriorate.plots import (
     straight_line_diagram,
 )
 from trackdyn.deterioration.results import vehicle_shares
-from trackdyn.io import write_netcdf
+from trackdyn.netcdf import write_netcdf
 
 
 def _shares(ds) -> pd.DataFrame:

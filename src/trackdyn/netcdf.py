@@ -1,0 +1,214 @@
+"""netCDF files: CF-1.8, with the run's provenance, the same bytes for the same run.
+
+Every command writes its Datasets through `write_netcdf`, which makes the file follow the
+CF conventions 1.8 (checked by the IOOS compliance checker in the tests) without changing
+the Dataset the command goes on to plot:
+
+- global attributes ``Conventions``, ``title``, ``history`` (the command line, no date),
+  ``trackdyn_version``, ``source``, and from the output folder's `trackdyn.staging.Record`
+  the inputs (``input_<name>`` path and ``input_<name>_sha256``), the options
+  (``option_<name>``) and the vehicle parameters (``vehicle_<name>`` [SI]);
+- every dimension has an index coordinate: a dimension labelled by names (``contact``,
+  ``rail``, ``dof``, ...) is written as an integer index with the names in the label
+  variable ``<dim>_name`` (CF 6.1: a coordinate variable is numeric); a dimension without a
+  coordinate gets as index the one strictly increasing coordinate along it (``sleeper``:
+  the positions of ``sleeper_distance``, so that ``ds.settlement.plot()`` draws against
+  distance), else an integer index (``segment``, ``step``);
+- no ``_FillValue`` on coordinates; 64-bit integers as 32-bit; every variable has a
+  ``long_name`` (taken from its name where the Dataset gives none) and, where the name ends
+  in a unit (``dyn_load_sd_kN``), its ``units``; units in UDUNITS spelling (``MGT``, million
+  gross tonnes, as ``Mt``);
+- the time axis of a run is written as ``run_time``: CF reads a variable named ``time`` as
+  calendar time, which needs a reference date that a simulation has not;
+- the attributes that say how long parts of the computation took (`WALL_CLOCK`) are left
+  out of the file, so that two identical runs write identical files; the command's summary
+  (``summary.json``) keeps them.
+
+`read_netcdf` gives back the Dataset as the command had it (names as coordinates again).
+
+References
+----------
+Eaton, B. et al. (2018), NetCDF Climate and Forecast (CF) Metadata Conventions, version
+1.8, https://cfconventions.org/Data/cf-conventions/cf-conventions-1.8/cf-conventions.html
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from trackdyn.staging import record_of
+
+CONVENTIONS = "CF-1.8"
+UDUNITS = {"MGT": "Mt", "-": "1"}
+"""Units spelled for UDUNITS in the file: in-memory spelling -> file spelling."""
+NAME_UNITS = {
+    "_kN_per_mm": "kN/mm",
+    "_m_per_s2": "m/s^2",
+    "_m_per_s": "m/s",
+    "_kmh": "km/h",
+    "_kN": "kN",
+    "_mm": "mm",
+    "_Hz": "Hz",
+    "_mgt": "Mt",
+    "_m": "m",
+    "_s": "s",
+    "_N": "N",
+}
+"""Unit of a variable whose name ends in the key (the project's column-name convention)."""
+RENAMED = {"time": "run_time"}
+"""Dimensions written under another name (see the module docstring)."""
+LABEL_SUFFIX = "_name"
+WALL_CLOCK = ("time_vehicle_runs_s", "time_beam_solves_s", "time_bookkeeping_s")
+"""Attributes of a deterioration result that say how long its parts took [s]."""
+
+
+def timings(ds) -> dict[str, float]:
+    """The attributes of ``ds`` that say how long parts of its computation took [s]."""
+    return {k: float(v) for k, v in ds.attrs.items() if k in WALL_CLOCK}
+
+
+def _unit_of(name: str) -> tuple[str, str | None]:
+    for suffix, unit in NAME_UNITS.items():
+        if name.endswith(suffix) and len(name) > len(suffix):
+            return name.removesuffix(suffix), unit
+    return name, None
+
+
+def _attribute(value):
+    """A value netCDF stores: numbers and strings as they are, anything else as text."""
+    if isinstance(value, bool | np.bool_):
+        return str(bool(value)).lower()
+    if isinstance(value, int | float | str | np.integer | np.floating):
+        return value
+    return "none" if value is None else str(value)
+
+
+def _describe(var, name: str) -> None:
+    """Give ``var`` a long_name and CF units (in place, on the file's copy)."""
+    stem, unit = _unit_of(name)
+    attrs = var.attrs
+    if "units" not in attrs and unit is not None and var.dtype.kind in "fiu":
+        attrs["units"] = unit
+    if "units" in attrs:
+        attrs["units"] = UDUNITS.get(attrs["units"], attrs["units"])
+    if "long_name" not in attrs:
+        attrs["long_name"] = stem.replace("_", " ")
+    positive = attrs.pop("positive", None)  # CF: an attribute of vertical coordinates only
+    if positive:
+        attrs["long_name"] += f", {positive} positive"
+
+
+def _index(ds, dim: str):
+    """The index coordinate of a dimension that has none: the one strictly increasing
+    numeric coordinate along it (``sleeper_distance`` for ``sleeper``), else 0, 1, 2..."""
+    along = [
+        c for c in ds.coords.values()
+        if c.dims == (dim,) and c.dtype.kind == "f" and np.all(np.diff(c.values) > 0)
+    ]  # fmt: skip
+    if len(along) == 1:
+        c = along[0]
+        return (dim, c.values, {"long_name": str(c.name).replace("_", " "), **c.attrs})
+    index = np.arange(ds.sizes[dim], dtype=np.int32)
+    return (dim, index, {"long_name": f"{dim} index (0: first)"})
+
+
+def to_cf(ds, record=None):
+    """The Dataset as `write_netcdf` writes it (a copy; ``ds`` is left as it is).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A command's result.
+    record : trackdyn.staging.Record, optional
+        The run's provenance, for the global attributes.
+    """
+    out = ds.copy()
+    out.attrs = {k: v for k, v in ds.attrs.items() if k not in WALL_CLOCK}
+    for dim in list(out.dims):
+        if dim in out.coords and out[dim].dtype.kind in "UO":
+            names = out[dim].variable
+            out = out.drop_vars(dim).assign_coords({f"{dim}{LABEL_SUFFIX}": names})
+            out[f"{dim}{LABEL_SUFFIX}"].attrs.setdefault("long_name", f"{dim} name")
+        if dim not in out.indexes:
+            out = out.assign_coords({dim: _index(out, dim)})
+    out = out.rename({k: v for k, v in RENAMED.items() if k in out.dims})
+    for name, var in out.variables.items():
+        if var.dtype.kind in "iu" and var.dtype.itemsize > 4:
+            if var.size and np.abs(var.values).max() >= 2**31:
+                raise ValueError(f"{name}: integers beyond 32 bits")
+            out[name] = var.astype(np.int32)
+        _describe(out[name].variable, str(name))
+    if "run_time" in out.variables:
+        out["run_time"].attrs["long_name"] = "time from the start of the run"
+    out.attrs.update(global_attributes(out.attrs.get("title"), record))
+    return out
+
+
+def global_attributes(title: str | None, record=None) -> dict:
+    """CF and provenance attributes of a file.
+
+    Parameters
+    ----------
+    title : str, optional
+        Title; default the record's.
+    record : trackdyn.staging.Record, optional
+        The run's provenance.
+    """
+    from trackdyn import __version__
+
+    attrs = {
+        "Conventions": CONVENTIONS,
+        "title": title or (record.title if record else "trackdyn result"),
+        "history": record.command_line if record else f"trackdyn {__version__}",
+        "source": f"trackdyn {__version__}",
+        "trackdyn_version": __version__,
+    }
+    if record is not None:
+        for name, (path, digest) in record.input_digests().items():
+            attrs[f"input_{name}"] = path
+            attrs[f"input_{name}_sha256"] = digest
+        attrs.update({f"option_{k}": v for k, v in record.options.items()})
+        attrs.update({f"vehicle_{k}": v for k, v in record.vehicle.items()})
+    return {k: _attribute(v) for k, v in attrs.items()}
+
+
+def write_netcdf(ds, path) -> None:
+    """Write a Dataset to netCDF-4 as the module docstring says, uncompressed.
+
+    Simulated float64 time series are mostly noise in their last digits: zlib saved about
+    20 % of a 1 km run's file (24.5 against 31 MB) and took 0.9 s against 0.07 s to write.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A command's result.
+    path : Path
+        The file, in a command's staging folder (`trackdyn.staging.output_folder`), whose
+        record gives the provenance.
+    """
+    record = record_of(path)
+    out = to_cf(ds, record)
+    if record is not None:
+        record.timings.update(timings(ds))
+    encoding = {name: {"_FillValue": None} for name in out.coords}
+    out.to_netcdf(path, format="NETCDF4", encoding=encoding)
+
+
+def read_netcdf(path):
+    """A file written by `write_netcdf`, as the command's Dataset (names as coordinates).
+
+    Parameters
+    ----------
+    path : path
+        The netCDF file.
+    """
+    import xarray as xr
+
+    ds = xr.load_dataset(path)
+    ds = ds.rename({v: k for k, v in RENAMED.items() if v in ds.dims})
+    for dim in list(ds.dims):
+        label = f"{dim}{LABEL_SUFFIX}"
+        if label in ds.coords and ds[label].dims == (dim,):
+            names = ds[label].variable
+            ds = ds.drop_vars([dim, label]).assign_coords({dim: names})
+    return ds
