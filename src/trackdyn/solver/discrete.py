@@ -335,6 +335,16 @@ def start(p, track, model, axles, window):
     return np.r_[q, q], np.concatenate([full, full])
 
 
+def first_window(p, track, off) -> tuple[int, int]:
+    """First node and number of nodes of the window at the start: the axles' span and the
+    margin each side, on the shortest bays."""
+    x = track.position
+    span = off.max() - off.min() + 2 * track.params.margin
+    width = min(int(np.ceil(span / np.diff(x).min())) + 4, x.size - 1)
+    lo = np.searchsorted(x, p.centre0 + off.min() - track.params.margin) - 1
+    return int(np.clip(lo, 0, x.size - width - 1)), width
+
+
 def solve(p, newton_max_iter: int = 50, advanced=None) -> dict:
     """Integrate one run on the discrete track (``p.inputs`` a `DiscreteTrack`).
 
@@ -358,10 +368,7 @@ def solve(p, newton_max_iter: int = 50, advanced=None) -> dict:
     trib = track.spacing
     per_contact = np.array([float(len(a)) for a in model.contact_axles])
     hertz = hertz_stiffness(model.static_wheel_load, prm.wheel_radius)
-    span = off.max() - off.min() + 2 * prm.margin
-    width = min(int(np.ceil(span / L.min())) + 4, x.size - 1)
-    lo = int(np.clip(np.searchsorted(x, p.centre0 + off.min() - prm.margin) - 1, 0,
-                     x.size - width - 1))  # fmt: skip
+    lo, width = first_window(p, track, off)
     try:
         z, state = start(p, track, model, axles, (lo, width))
     except TrackdynInputError as exc:

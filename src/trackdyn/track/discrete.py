@@ -65,8 +65,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.linalg import solve_banded
 from scipy.ndimage import median_filter
 
+from trackdyn.beam.railseat import RailBeam, rest_state
 from trackdyn.beam.static import linear_supports, solve_beam
 from trackdyn.errors import TrackdynInputError
 from trackdyn.track.rails import rail_section
@@ -299,5 +301,32 @@ def discrete_track(lin: LinearisedTrack, params: DiscreteParameters | None = Non
         gap, p, section.EI, section.mass, density * section.second_moment,
         np.zeros((3, len(RAILS), x.size)),
     )  # fmt: skip
-    rest, _ = track.static(np.empty(0), np.empty(0, int), np.empty(0))
-    return DiscreteTrack(**{**track.__dict__, "rest": rest})
+    return DiscreteTrack(**{**track.__dict__, "rest": _rest(track)})
+
+
+def _rest(track: DiscreteTrack) -> np.ndarray:
+    """Rail deflection, rotation and sleeper displacement at rest, (3, 2, nodes).
+
+    The rail seats bear as the rail beam's tensionless springs of `trackdyn.beam.railseat`
+    (its active-set solve, self-weight of rail and sleeper lumped at the rail seat); the
+    rotations follow from the deflections (no moments act at the nodes).
+    """
+    x, p = track.position, track.params
+    weight = (track.rail_mass * track.spacing + p.sleeper_mass) * GRAVITY
+    L = np.diff(x)
+    b, c4, c2 = 6 * track.EI / L**2, 4 * track.EI / L, 2 * track.EI / L
+    tri = np.zeros((3, x.size))  # the rotations' stiffness, tridiagonal
+    tri[0, 1:], tri[2, :-1] = c2, c2
+    tri[1, :-1] += c4
+    tri[1, 1:] += c4
+    state = np.empty((3, len(RAILS), x.size))
+    for r in range(len(RAILS)):
+        rest = rest_state(RailBeam(x, track.kd[r], weight, track.EI), track.gap[r])
+        dw = b * np.diff(rest.deflection)  # b (w_{i+1} - w_i) per element
+        moment = np.zeros(x.size)  # -(K_θw w) at each node
+        moment[:-1] += dw
+        moment[1:] += dw
+        theta = solve_banded((1, 1), tri, moment)
+        pad = rest.force - p.sleeper_mass * GRAVITY
+        state[:, r] = rest.deflection, theta, rest.deflection - pad / p.pad_stiffness
+    return state
