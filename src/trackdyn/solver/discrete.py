@@ -66,7 +66,8 @@ def advance(
     ds_idx, ds_val, H, jinv, wedge, static_load,
     ax_off, ax_contact, ax_rail, per_contact, hertz,
     x, ea, eb, ec4, ec2, EI, mw, J, ms, kp, cp, kb, cb, sgap, rest_w, rest_th, gravity,
-    track, window, margin, ax_el, z, centre, r_in, dt, step0, store_every, max_iter,
+    track, window, margin, ax_el, rail_axles, z, centre, r_in, dt, step0, store_every,
+    max_iter,
     out_q, out_v, out_a, out_wl, out_secondary, out_fw, out_vw, out_k, out_r, peak,
 ):  # fmt: skip
     """Advance the vehicle and the track ``centre.size`` steps, updating state in place.
@@ -74,8 +75,9 @@ def advance(
     ``track`` (6, 2, nodes) holds rail deflection, rail rotation and sleeper displacement
     now and one step before; ``window[0]`` is the first node of the window, ``window[1]``
     its number of nodes, kept ``margin`` [m] behind the rearmost axle; ``ax_el`` each
-    axle's element (a search start); ``gravity`` [m/s²]. ``peak``
-    (2, nodes) collects the largest sleeper-ballast force [N].
+    axle's element (a search start); ``gravity`` [m/s²]. ``peak`` (axles, nodes) collects
+    the largest sleeper-ballast force [N] of each sleeper while each axle is the nearest
+    on its rail (``rail_axles`` (2, k): each rail's axles from the rear, -1 padded).
     """
     n = p_idx.shape[0]
     nc = dc_idx.shape[0]
@@ -196,8 +198,16 @@ def advance(
                 fw[r, k + 1] += W[a] * shape[a, 2]
                 fm[r, k + 1] += W[a] * shape[a, 3]
         for r in range(2):
+            j = 0  # the nearest axle on this rail, from the rear
+            last = 0
+            while last + 1 < rail_axles.shape[1] and rail_axles[r, last + 1] >= 0:
+                last += 1
             for k in range(width):
                 i = i0 + k
+                while j < last and 2.0 * (x[i] - centre[s]) > (
+                    ax_off[rail_axles[r, j]] + ax_off[rail_axles[r, j + 1]]
+                ):
+                    j += 1
                 w0 = track[0, r, i]
                 zs0 = track[2, r, i]
                 vw = (w0 - track[3, r, i]) * invdt
@@ -209,8 +219,9 @@ def advance(
                     ballast = kb[r, i] * pen + cb * vz
                     if ballast < 0.0:
                         ballast = 0.0
-                if ballast > peak[r, i]:
-                    peak[r, i] = ballast
+                a = rail_axles[r, j]
+                if a >= 0 and ballast > peak[a, i]:
+                    peak[a, i] = ballast
                 aw = (fw[r, k] - pad) / mw[i] + gravity
                 at = fm[r, k] / J[i]
                 az = (pad - ballast) / ms + gravity
@@ -353,9 +364,11 @@ def solve(p, newton_max_iter: int = 50, advanced=None) -> dict:
     dict
         The `OUTPUTS` arrays of `trackdyn.solver.statics` (``wl`` the mean of the contact's
         wheel loads, ``k`` its Hertz stiffness, ``r`` the mean unloaded profile under its
-        axles), and ``ballast_peak`` (2 rails, sleepers) [N]: the largest sleeper-ballast
-        contact force of each sleeper of the section over the run; or the
-        `TrackdynInputError` that stopped it.
+        axles); ``ballast_peak`` (2 rails, sleepers) [N], the largest sleeper-ballast
+        contact force of each sleeper of the section over the run, and
+        ``ballast_wheel_peak`` (axles in the order of `axle_table`, sleepers) [N], that
+        force while each axle was the nearest on its rail (self-weight included; a sleeper
+        that axle never came near keeps 0); or the `TrackdynInputError` that stopped it.
     """
     track, model = p.inputs, vehicle_model(p.model)
     prm = track.params
@@ -377,7 +390,11 @@ def solve(p, newton_max_iter: int = 50, advanced=None) -> dict:
     ax_el = np.searchsorted(x, p.centre0 + off).astype(np.int64) - 1
     mats = step_matrices(model, p.dt)
     out = {name: np.empty((p.n_store, w)) for name, w in widths(model).items()}
-    peak = np.zeros((len(RAILS), x.size))
+    peak = np.zeros((off.size, x.size))
+    rail_axles = np.full((len(RAILS), off.size), -1, np.int64)
+    for r in range(len(RAILS)):
+        mine = np.flatnonzero(rail == r)
+        rail_axles[r, : mine.size] = mine[np.argsort(off[mine])]
     sgap = track.sleeper_gap
     for first in range(0, p.n_steps, CHUNK_STEPS):
         steps = np.arange(first, min(first + CHUNK_STEPS, p.n_steps))
@@ -390,7 +407,7 @@ def solve(p, newton_max_iter: int = 50, advanced=None) -> dict:
             *mats[:-1], model.static_wheel_load, off, contact, rail, per_contact, hertz,
             x, *coeff, EI, track.rail_mass * trib, track.rail_rotary * trib, prm.sleeper_mass,
             prm.pad_stiffness, prm.pad_damping, track.kb, prm.ballast_damping, sgap,
-            track.rest[0], track.rest[1], GRAVITY, state, window, prm.margin, ax_el, z,
+            track.rest[0], track.rest[1], GRAVITY, state, window, prm.margin, ax_el, rail_axles, z,
             centre, r_in, p.dt, first, p.store_every, newton_max_iter,
             *(a[row:] for a in out.values()), peak,
         )  # fmt: skip
@@ -399,5 +416,8 @@ def solve(p, newton_max_iter: int = 50, advanced=None) -> dict:
             return stop(p, first + int(at))
         if advanced is not None:
             advanced(steps.size)
-    out["ballast_peak"] = peak[:, track.first : track.first + track.count]
+    wheel = peak[:, track.first : track.first + track.count]
+    out["ballast_wheel_peak"] = wheel
+    out["ballast_peak"] = np.array([wheel[rail == r].max(axis=0, initial=0.0)
+                                    for r in range(len(RAILS))])  # fmt: skip
     return out
