@@ -61,10 +61,12 @@ def reference(p, t_eval):
     rest = track.rest
 
     def wheel(t, q, u):
-        """Wheel loads [N] and their nodal load vectors per rail."""
+        """Wheel load of each axle [N] (a contact's axles share it) and the nodal load
+        vectors per rail."""
         xa = p.centre0 + p.speed * t + off
-        W = np.zeros(off.size)
-        loads = np.zeros((2, 2 * N))
+        nc = len(model.contact_names)
+        top, flex, count = np.zeros(nc), np.zeros(nc), np.bincount(contact, minlength=nc)
+        shapes = []
         for a in range(off.size):
             r = rail[a]
             e = min(np.searchsorted(x, xa[a], side="right") - 1, N - 2)
@@ -73,10 +75,17 @@ def reference(p, t_eval):
             shape = hermite(s, L)
             dofs = slice(2 * e, 2 * e + 4)
             rel = u[r, dofs] - np.ravel(rest[:2, r, e : e + 2].T)
-            local = (s * L) ** 3 * ((1 - s) * L) ** 3 / (3 * track.EI * L**3)
             prof = track.geometry.at(["left", "right"][r], xa[a])
-            delta = model.Dc[contact[a]] @ q - prof - shape @ rel + ps / kH
-            W[a] = max(delta, 0.0) / (1 / kH + local)
+            top[contact[a]] += (prof + shape @ rel) / count[contact[a]]
+            flex[contact[a]] += (s * L) ** 3 * ((1 - s) * L) ** 3 / (3 * track.EI * L**3) / count[
+                contact[a]
+            ]
+            shapes.append((r, dofs, shape))
+        delta = model.Dc @ q - top + ps / kH
+        Wc = np.maximum(delta, 0.0) / (1 / kH + flex)
+        W = Wc[contact]
+        loads = np.zeros((2, 2 * N))
+        for a, (r, dofs, shape) in enumerate(shapes):
             loads[r, dofs] += W[a] * shape
         return W, loads
 

@@ -13,7 +13,10 @@ rail deflection under the wheel exact for the static beam):
 
 with ``r`` the unloaded profile at rest and ``u - u_rest`` the rail's deflection from its
 rest state; the vehicle feels ``W - Ps`` per axle (its coordinates are those of the
-Winkler runs), the rail ``W`` through the element's consistent nodal loads. Only the
+Winkler runs), the rail ``W`` through the element's consistent nodal loads. A contact
+that stands for several axles (the bogie approximation of 5.4.3: one lumped wheelset,
+the bogie free to pitch) carries the same load on each: ``r + u - u_rest`` and the local
+flexibility are its axles' means, as the Winkler contact takes the mean loaded profile. Only the
 nodes of a window moving with the vehicle (the axles' span and the margin each side) are
 integrated; the nodes ahead are at rest, those behind keep their last state, so a step
 costs the same on any length of track.
@@ -93,6 +96,8 @@ def advance(
     fc = np.empty(nc)
     wl = np.empty(nc)
     rc = np.empty(nc)
+    top = np.empty(nc)
+    flex = np.empty(nc)
     vfree = np.empty(nw)
     rhs = np.empty(nw)
     v = np.zeros(nw)
@@ -115,8 +120,8 @@ def advance(
         window[0] = i0
         # wheel-rail forces
         for c in range(nc):
-            fc[c] = 0.0
-            wl[c] = 0.0
+            top[c] = 0.0  # mean rail top under the contact's axles
+            flex[c] = 0.0  # mean local flexibility
             rc[c] = 0.0
         for a in range(na):
             c = ax_contact[a]
@@ -138,17 +143,20 @@ def advance(
                  + shape[a, 1] * (track[1, r, e] - rest_th[r, e])
                  + shape[a, 2] * (track[0, r, e + 1] - rest_w[r, e + 1])
                  + shape[a, 3] * (track[1, r, e + 1] - rest_th[r, e + 1]))  # fmt: skip
+            pa = t * L
+            pb = L - pa
+            flex[c] += pa * pa * pa * pb * pb * pb / (3.0 * EI * L * L * L) / per_contact[c]
+            top[c] += (r_in[s, a] + u) / per_contact[c]
+            rc[c] += r_in[s, a] / per_contact[c]
+        for c in range(nc):
             dq = 0.0
             for j in range(dc_idx.shape[1]):
                 dq += dc_val[c, j] * z[dc_idx[c, j]]
-            pa = t * L
-            pb = L - pa
-            local = pa * pa * pa * pb * pb * pb / (3.0 * EI * L * L * L)
-            delta = dq - r_in[s, a] - u + static_load / hertz
-            W[a] = delta / (1.0 / hertz + local) if delta > 0.0 else 0.0
-            fc[c] += W[a] - static_load
-            wl[c] += W[a] / per_contact[c]
-            rc[c] += r_in[s, a] / per_contact[c]
+            delta = dq - top[c] + static_load / hertz
+            wl[c] = delta / (1.0 / hertz + flex[c]) if delta > 0.0 else 0.0
+            fc[c] = per_contact[c] * (wl[c] - static_load)
+        for a in range(na):
+            W[a] = wl[ax_contact[a]]
         # vehicle: q1 without the wedge forces, then the wedges
         for i in range(n):
             acc = 0.0
@@ -314,8 +322,9 @@ def start(p, track, model, axles, window):
     """Static start: the vehicle on the track under its wheel loads (fixed point).
 
     Each iteration solves the track under the wheel loads ``W``, then the vehicle on springs
-    ``(1/kH + 1/k)^-1`` per axle (``k`` the track's point stiffness) to the rail tops less
-    ``(W - Ps) / k``, which gives the next ``W``. Returns the vehicle's ``z = [q0, q0]`` and
+    ``(1/kH + 1/k)^-1`` per axle (``k`` the track's point stiffness; a contact's axles share
+    its load, their means taken) to the rail tops less ``(W - Ps) / k``, which gives the
+    next ``W``. Returns the vehicle's ``z = [q0, q0]`` and
     the track state (6, 2, nodes), at rest outside the window and moving with nothing.
     """
     off, contact, rail = axles
@@ -326,16 +335,20 @@ def start(p, track, model, axles, window):
     rest = np.array([_rest_under(track, r, x) for r, x in zip(rail, xa, strict=True)])
     point = track.point_stiffness()
     k2 = np.array([np.interp(x, track.position, point[r]) for r, x in zip(rail, xa, strict=True)])
-    keff = 1.0 / (1.0 / hertz + 1.0 / k2)
-    D = model.Dc[contact]  # (axles, dof)
+    nc = len(model.contact_names)
+    count = np.bincount(contact, minlength=nc).astype(float)
+    mean = np.zeros((nc, off.size))  # a contact's mean over its axles
+    mean[contact, np.arange(off.size)] = 1.0 / count[contact]
+    kc = count / (1.0 / hertz + mean @ (1.0 / k2))  # tangent stiffness of each contact
     W = np.full(off.size, ps)
     lo, width = window
     part = slice(max(lo - 10, 0), min(lo + width + 10, track.position.size))
     for _ in range(START_ITERATIONS):
         state, under = track.static(xa, rail, W, part)
-        ref = profile + under - rest - (W - ps) / k2
-        q = np.linalg.solve(model.K + D.T @ (keff[:, None] * D), D.T @ (keff * ref))
-        W = ps + keff * (D @ q - ref)
+        ref = mean @ (profile + under - rest - (W - ps) / k2)
+        q = np.linalg.solve(model.K + model.Dc.T @ (kc[:, None] * model.Dc),
+                            model.Dc.T @ (kc * ref))  # fmt: skip
+        W = (ps + kc * (model.Dc @ q - ref) / count)[contact]
     if np.any(W <= 0):
         raise TrackdynInputError(
             f"no static start on the discrete track at {p.centre0:.2f} m: a wheel lifts off"
