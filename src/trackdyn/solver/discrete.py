@@ -69,7 +69,7 @@ def advance(
     ds_idx, ds_val, H, jinv, wedge, static_load,
     ax_off, ax_contact, ax_rail, per_contact, hertz,
     x, ea, eb, ec4, ec2, EI, mw, J, ms, kp, cp, kb, cb, sgap, rest_w, rest_th, gravity,
-    track, window, margin, ax_el, rail_axles, z, centre, r_in, dt, step0, store_every,
+    track, window, margin, ax_el, rail_axles, z, centre, r_in, k_in, dt, step0, store_every,
     max_iter,
     out_q, out_v, out_a, out_wl, out_secondary, out_fw, out_vw, out_k, out_r, peak,
 ):  # fmt: skip
@@ -250,7 +250,7 @@ def advance(
                 return NOT_FINITE, s
             for c in range(nc):
                 out_wl[stored, c] = wl[c]
-                out_k[stored, c] = hertz * per_contact[c]
+                out_k[stored, c] = k_in[s, c]
                 out_r[stored, c] = rc[c]
             stored += 1
         to_store -= 1
@@ -375,9 +375,10 @@ def solve(p, newton_max_iter: int = 50, advanced=None) -> dict:
     Returns
     -------
     dict
-        The `OUTPUTS` arrays of `trackdyn.solver.statics` (``wl`` the mean of the contact's
-        wheel loads, ``k`` its Hertz stiffness, ``r`` the mean unloaded profile under its
-        axles); ``ballast_peak`` (2 rails, sleepers) [N], the largest sleeper-ballast
+        The `OUTPUTS` arrays of `trackdyn.solver.statics` (``wl`` the load of each of the
+        contact's wheels, ``k`` the track's point stiffness under its axles, summed (eq 5.8
+        from the rail-seat stiffness, `DiscreteTrack.point_stiffness`), ``r`` the mean
+        unloaded profile at rest under its axles); ``ballast_peak`` (2 rails, sleepers) [N], the largest sleeper-ballast
         contact force of each sleeper of the section over the run, and
         ``ballast_wheel_peak`` (axles in the order of `axle_table`, sleepers) [N], that
         force while each axle was the nearest on its rail (self-weight included; a sleeper
@@ -409,19 +410,23 @@ def solve(p, newton_max_iter: int = 50, advanced=None) -> dict:
         mine = np.flatnonzero(rail == r)
         rail_axles[r, : mine.size] = mine[np.argsort(off[mine])]
     sgap = track.sleeper_gap
+    point = track.point_stiffness()
     for first in range(0, p.n_steps, CHUNK_STEPS):
         steps = np.arange(first, min(first + CHUNK_STEPS, p.n_steps))
         centre = p.centre0 + p.speed * p.dt * steps
         r_in = np.column_stack(
             [track.geometry.at(RAILS[r], centre + o) for o, r in zip(off, rail, strict=True)]
         )
+        k_in = np.zeros((steps.size, len(per_contact)))
+        for o, c, r in zip(off, contact, rail, strict=True):
+            k_in[:, c] += np.interp(centre + o, x, point[r])
         row = (first + p.store_every - 1) // p.store_every
         status, at = advance(
             *mats[:-1], model.static_wheel_load, off, contact, rail, per_contact, hertz,
             x, *coeff, EI, track.rail_mass * trib, track.rail_rotary * trib, prm.sleeper_mass,
             prm.pad_stiffness, prm.pad_damping, track.kb, prm.ballast_damping, sgap,
             track.rest[0], track.rest[1], GRAVITY, state, window, prm.margin, ax_el, rail_axles, z,
-            centre, r_in, p.dt, first, p.store_every, newton_max_iter,
+            centre, r_in, k_in, p.dt, first, p.store_every, newton_max_iter,
             *(a[row:] for a in out.values()), peak,
         )  # fmt: skip
         if status != DONE:
