@@ -110,7 +110,9 @@ class RunOptions(Strict):
     @model_validator(mode="after")
     def _discrete_central(self):
         if self.track == "discrete" and (self.solver != "central" or self.nonlinear):
-            raise ValueError('track = "discrete" runs with solver = "central" and nonlinear = false')
+            raise ValueError(
+                'track = "discrete" runs with solver = "central" and nonlinear = false'
+            )
         return self
 
     @property

@@ -47,8 +47,8 @@ from trackdyn.solver.central import (
     DONE,
     NEWTON_FAILED,
     NOT_FINITE,
-    store_vehicle,
     step_matrices,
+    store_vehicle,
     wedge_step,
 )
 from trackdyn.solver.statics import failure, non_finite, widths
@@ -378,8 +378,9 @@ def solve(p, newton_max_iter: int = 50, advanced=None) -> dict:
         The `OUTPUTS` arrays of `trackdyn.solver.statics` (``wl`` the load of each of the
         contact's wheels, ``k`` the track's point stiffness under its axles, summed (eq 5.8
         from the rail-seat stiffness, `DiscreteTrack.point_stiffness`), ``r`` the mean
-        unloaded profile at rest under its axles); ``ballast_peak`` (2 rails, sleepers) [N], the largest sleeper-ballast
-        contact force of each sleeper of the section over the run, and
+        unloaded profile at rest under its axles); ``ballast_peak`` (2 rails, sleepers)
+        [N], the largest sleeper-ballast contact force of each sleeper of the section over
+        the run, and
         ``ballast_wheel_peak`` (axles in the order of `axle_table`, sleepers) [N], that
         force while each axle was the nearest on its rail (self-weight included; a sleeper
         that axle never came near keeps 0); or the `TrackdynInputError` that stopped it.

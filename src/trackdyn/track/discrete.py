@@ -76,7 +76,6 @@ from trackdyn.track.track import RAILS, Geometry, LinearisedTrack
 from trackdyn.track.winkler import stiffness_from_modulus
 from trackdyn.units import GRAVITY
 
-
 VOID_NEIGHBOURS = 5
 """Sleepers each side whose median seating gap counts as seating of the whole track."""
 
