@@ -56,8 +56,10 @@ from trackdyn.track.discrete import hertz_stiffness
 from trackdyn.track.track import RAILS
 from trackdyn.units import GRAVITY
 
-STABILITY_FRACTION = 0.5
-"""Time step as a fraction of the explicit scheme's limit ``2 / ω_max`` of the track."""
+STABILITY_FRACTION = 0.8
+"""Default time step as a fraction of the explicit scheme's limit ``2 / ω_max`` of the track
+(the highest modes are the rail's rotations, far above the frequencies of interest: on the
+example at 100 km/h, 0.5 gives wheel loads within 0.08 % of their dynamic part)."""
 
 START_ITERATIONS = 6
 """Fixed-point iterations of the static start (wheel loads against track deflection)."""
@@ -382,7 +384,8 @@ def solve(p, newton_max_iter: int = 50, advanced=None) -> dict:
         [N], the largest sleeper-ballast contact force of each sleeper of the section over
         the run, and
         ``ballast_wheel_peak`` (axles in the order of `axle_table`, sleepers) [N], that
-        force while each axle was the nearest on its rail (self-weight included; a sleeper
+        force while each axle was the nearest on its rail (self-weight included; 0 on a rail
+        without wheels; a sleeper
         that axle never came near keeps 0); or the `TrackdynInputError` that stopped it.
     """
     track, model = p.inputs, vehicle_model(p.model)
