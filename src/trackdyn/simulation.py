@@ -12,8 +12,10 @@ spatially varying track stiffness. PhD thesis, University of Pretoria,
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 import xarray as xr
 
@@ -175,9 +177,14 @@ def run_batch(vehicles: list[Vehicle], tracks, options: list[RunOptions], *,
     if len(vehicles) > 1:
         label = f"{len(vehicles)} runs [steps]"
     with progress_bar(progress, total, label) as bar:
-        for i in [i for i in todo if options[i].track == "discrete"]:
-            out = discrete.solve(made[i], newton_max_iter, bar.advance)
-            results[i] = out if isinstance(out, Exception) else Run(made[i], out)
+        # discrete-track runs one per thread (the compiled loop releases the GIL), as many
+        # at once as numba has threads
+        index = [i for i in todo if options[i].track == "discrete"]
+        with ThreadPoolExecutor(max(1, min(len(index), numba.get_num_threads()))) as pool:
+            solved = pool.map(lambda i: discrete.solve(made[i], newton_max_iter, bar.advance),
+                              index)  # fmt: skip
+            for i, out in zip(index, solved, strict=True):
+                results[i] = out if isinstance(out, Exception) else Run(made[i], out)
         todo = [i for i in todo if options[i].track == "winkler"]
         for solver in dict.fromkeys(options[i].solver for i in todo):
             index = [i for i in todo if options[i].solver == solver]

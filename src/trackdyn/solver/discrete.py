@@ -65,7 +65,7 @@ START_ITERATIONS = 6
 """Fixed-point iterations of the static start (wheel loads against track deflection)."""
 
 
-@njit(cache=True, fastmath=True, error_model="numpy")
+@njit(cache=True, fastmath=True, error_model="numpy", nogil=True)
 def advance(
     p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dc_idx, dc_val, dw_idx, dw_val,
     ds_idx, ds_val, H, jinv, wedge, static_load,
