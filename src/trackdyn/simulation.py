@@ -214,8 +214,10 @@ def simulate_batch(
     ----------
     vehicles : list of Vehicle
         One vehicle per run.
-    tracks : Track, LinearisedTrack or list of them
-        The track, or one per run (e.g. linearised about each vehicle's static load).
+    tracks : Track, LinearisedTrack, DiscreteTrack or list of them
+        The track, or one per run (e.g. linearised about each vehicle's static load). A
+        `trackdyn.track.discrete.DiscreteTrack` is the discrete track itself (for
+        ``track = "discrete"``; with the Winkler track, its linearised track is used).
     options : list of RunOptions
         One per run: model, speed, time step, storage, track law, solver.
     progress, newton_max_iter
@@ -285,9 +287,11 @@ def simulate(
     ----------
     vehicle : Vehicle
         Vehicle parameter set.
-    track : Track or LinearisedTrack
+    track : Track, LinearisedTrack or DiscreteTrack
         The track; a `Track` is linearised about the vehicle's static wheel load with the
-        options' ``delta`` and ``extrapolate``.
+        options' ``delta`` and ``extrapolate``; with ``track = "discrete"`` the discrete
+        track is built from that linearisation (`trackdyn.track.discrete.discrete_track`)
+        unless given.
     options : RunOptions, optional
         Model, speed, time step, storage, linearisation and track law
         (`trackdyn.options.RunOptions`; default: the 11-DOF model at 60 km/h). The default
@@ -304,7 +308,9 @@ def simulate(
     Returns
     -------
     xarray.Dataset
-        See `trackdyn.results.make_dataset`.
+        See `trackdyn.results.make_dataset`; a run on the discrete track also holds
+        ``ballast_force_peak`` (rail, sleeper) [N], the largest sleeper-ballast contact
+        force of each sleeper over the run.
     """
     o = RunOptions() if options is None else options
     if isinstance(vehicle, list | tuple):
