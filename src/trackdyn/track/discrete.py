@@ -220,7 +220,7 @@ class DiscreteTrack:
         axle_rail : ndarray of int
             Rail of each axle (0 left, 1 right).
         load : ndarray
-            Wheel load of each axle [N].
+            Wheel load of each axle, >= 0 [N] (0: the wheel is lifted).
 
         Returns
         -------
@@ -236,7 +236,7 @@ class DiscreteTrack:
         state = self.rest.copy()
         rail = np.zeros(len(axle_x))
         for r in range(len(RAILS)):
-            mine = np.flatnonzero(np.asarray(axle_rail) == r)
+            mine = np.flatnonzero((np.asarray(axle_rail) == r) & (np.asarray(load) > 0))
             gap = self.gap[r, part]
             shift = max(0.0, -float(gap.min()))  # a uniform shift keeps gaps >= 0
             supports = linear_supports(x, self.kd[r, part], gap + shift)
