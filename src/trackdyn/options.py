@@ -18,6 +18,7 @@ nonlinear = false      # true: the bicubic track of 5.14 (single-wheel contacts)
 # start_m = 100         # part of the track to run over [m]; default the whole track
 # end_m = 400
 solver = "central"     # "reference": scipy DOP853 at tight tolerance, to check a case
+track = "winkler"      # "discrete": rails on pads, sleepers and ballast behind gaps
 ```
 """
 
@@ -76,6 +77,11 @@ class RunOptions(Strict):
     solver : {"central", "reference"}
         The compiled central-difference scheme, or scipy's DOP853 at tight tolerance
         (slow; to check a case), see `trackdyn.solver`.
+    track : {"winkler", "discrete"}
+        The track under the wheels: the linearised pseudo-static support of the seed
+        (5.4), or the discretely supported track of `trackdyn.track.discrete` (rails as
+        beams on pads, sleeper masses, tensionless ballast behind seating gaps; central
+        solver only), which also gives the sleeper-ballast force of every sleeper.
     """
 
     model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
@@ -90,6 +96,7 @@ class RunOptions(Strict):
     start_m: float | None = None
     end_m: float | None = None
     solver: Literal["central", "reference"] = "central"
+    track: Literal["winkler", "discrete"] = "winkler"
 
     @field_validator("model")
     @classmethod
@@ -99,6 +106,14 @@ class RunOptions(Strict):
         if value not in MODELS:
             raise unknown("model", value, MODELS)
         return value
+
+    @model_validator(mode="after")
+    def _discrete_central(self):
+        if self.track == "discrete" and (self.solver != "central" or self.nonlinear):
+            raise ValueError(
+                'track = "discrete" runs with solver = "central" and nonlinear = false'
+            )
+        return self
 
     @property
     def speed(self) -> float:

@@ -12,8 +12,10 @@ spatially varying track stiffness. PhD thesis, University of Pretoria,
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 import xarray as xr
 
@@ -22,10 +24,11 @@ from trackdyn.limits import MAX_STEPS
 from trackdyn.options import RunOptions
 from trackdyn.progress import progress_bar
 from trackdyn.results import make_dataset
-from trackdyn.solver import Problem, solve
+from trackdyn.solver import Problem, discrete, solve
 from trackdyn.solver.central import STEPS_PER_PERIOD, highest_frequency
+from trackdyn.track.discrete import DiscreteTrack, discrete_track
 from trackdyn.track.inputs import ContactInput
-from trackdyn.track.track import LinearisedTrack, Track
+from trackdyn.track.track import RAILS, LinearisedTrack, Track
 from trackdyn.vehicle.models import build_model
 from trackdyn.vehicle.parameters import Vehicle
 
@@ -54,9 +57,16 @@ def time_step(model, lin: LinearisedTrack, speed: float) -> tuple[float, float, 
 
 
 def _problem(vehicle, track, o: RunOptions) -> Problem:
-    """The solver's view of one run: model, track input, path, time step and storage."""
+    """The solver's view of one run: model, track input, path, time step and storage.
+
+    With ``o.track == "discrete"`` the input is a `DiscreteTrack` (given, or built from the
+    linearised track) and the default step is also kept within the track's own stable step.
+    """
     speed = o.speed
     m = build_model(o.model, vehicle)
+    given = track if isinstance(track, DiscreteTrack) else None
+    if given is not None:
+        track = given.lin
     lin = (
         track
         if isinstance(track, LinearisedTrack)
@@ -78,6 +88,14 @@ def _problem(vehicle, track, o: RunOptions) -> Problem:
             f"{front - rear:.2f} m"
         )
     default_dt, limit, omega = time_step(m, lin, speed)
+    inputs = ContactInput(m, lin, o.nonlinear)
+    if o.track == "discrete":
+        inputs = given or discrete_track(lin)
+        stable = discrete.stable_step(inputs, m.static_wheel_load)
+        default_dt = min(default_dt, stable)
+        if stable / discrete.STABILITY_FRACTION < limit:
+            limit = stable / discrete.STABILITY_FRACTION
+            omega = 2.0 / limit
     dt = default_dt if o.dt_s is None else o.dt_s
     if dt >= limit:
         raise TrackdynInputError(
@@ -91,7 +109,7 @@ def _problem(vehicle, track, o: RunOptions) -> Problem:
             f"{o.speed_kmh:g} km/h, more than the plausible {MAX_STEPS:.0e}"
         )
     store_every = o.store_every or max(1, round(OUTPUT_STEP / dt))
-    return Problem(m, ContactInput(m, lin, o.nonlinear), c0, speed, dt, n_steps, store_every)
+    return Problem(m, inputs, c0, speed, dt, n_steps, store_every)
 
 
 @dataclass(frozen=True)
@@ -159,6 +177,15 @@ def run_batch(vehicles: list[Vehicle], tracks, options: list[RunOptions], *,
     if len(vehicles) > 1:
         label = f"{len(vehicles)} runs [steps]"
     with progress_bar(progress, total, label) as bar:
+        # discrete-track runs one per thread (the compiled loop releases the GIL), as many
+        # at once as numba has threads
+        index = [i for i in todo if options[i].track == "discrete"]
+        with ThreadPoolExecutor(max(1, min(len(index), numba.get_num_threads()))) as pool:
+            solved = pool.map(lambda i: discrete.solve(made[i], newton_max_iter, bar.advance),
+                              index)  # fmt: skip
+            for i, out in zip(index, solved, strict=True):
+                results[i] = out if isinstance(out, Exception) else Run(made[i], out)
+        todo = [i for i in todo if options[i].track == "winkler"]
         for solver in dict.fromkeys(options[i].solver for i in todo):
             index = [i for i in todo if options[i].solver == solver]
             batch = [made[i] for i in index]
@@ -187,8 +214,10 @@ def simulate_batch(
     ----------
     vehicles : list of Vehicle
         One vehicle per run.
-    tracks : Track, LinearisedTrack or list of them
-        The track, or one per run (e.g. linearised about each vehicle's static load).
+    tracks : Track, LinearisedTrack, DiscreteTrack or list of them
+        The track, or one per run (e.g. linearised about each vehicle's static load). A
+        `trackdyn.track.discrete.DiscreteTrack` is the discrete track itself (for
+        ``track = "discrete"``; with the Winkler track, its linearised track is used).
     options : list of RunOptions
         One per run: model, speed, time step, storage, track law, solver.
     progress, newton_max_iter
@@ -209,7 +238,7 @@ def _check_types(vehicles, tracks, options) -> None:
     """Refuse arguments of the wrong kind with a message naming the argument."""
     kinds = (
         ("vehicle", vehicles, Vehicle, "a Vehicle (trackdyn.load_vehicle)"),
-        ("track", tracks, Track | LinearisedTrack, "a Track (trackdyn.load_track)"),
+        ("track", tracks, Track | LinearisedTrack | DiscreteTrack, "a Track (trackdyn.load_track)"),
         ("options", options, RunOptions, "RunOptions (trackdyn.RunOptions)"),
     )
     for name, values, kind, expected in kinds:
@@ -221,9 +250,22 @@ def _check_types(vehicles, tracks, options) -> None:
 
 
 def _dataset(run: Run, vehicle, o: RunOptions) -> xr.Dataset:
+    """The run's Dataset; a discrete-track run adds ``ballast_force_peak`` (rail, sleeper)."""
     p = run.problem
     flags = dict(dt=p.dt, speed=p.speed, nonlinear=o.nonlinear)
-    return make_dataset(p.model, vehicle, run.time, run.centre, run.out, **flags)
+    ds = make_dataset(p.model, vehicle, run.time, run.centre, run.out, **flags)
+    ds.attrs["track_model"] = o.track
+    if o.track == "discrete":
+        ds = ds.assign_coords(
+            rail=list(RAILS), sleeper_position=("sleeper", p.inputs.lin.track.supports.position)
+        )
+        ds["ballast_force_peak"] = (
+            ("rail", "sleeper"),
+            run.out["ballast_peak"],
+            {"units": "N", "long_name": "largest sleeper-ballast contact force of the run "
+             "(self-weight included)"},
+        )  # fmt: skip
+    return ds
 
 
 def simulate(
@@ -245,9 +287,11 @@ def simulate(
     ----------
     vehicle : Vehicle
         Vehicle parameter set.
-    track : Track or LinearisedTrack
+    track : Track, LinearisedTrack or DiscreteTrack
         The track; a `Track` is linearised about the vehicle's static wheel load with the
-        options' ``delta`` and ``extrapolate``.
+        options' ``delta`` and ``extrapolate``; with ``track = "discrete"`` the discrete
+        track is built from that linearisation (`trackdyn.track.discrete.discrete_track`)
+        unless given.
     options : RunOptions, optional
         Model, speed, time step, storage, linearisation and track law
         (`trackdyn.options.RunOptions`; default: the 11-DOF model at 60 km/h). The default
@@ -264,7 +308,9 @@ def simulate(
     Returns
     -------
     xarray.Dataset
-        See `trackdyn.results.make_dataset`.
+        See `trackdyn.results.make_dataset`; a run on the discrete track also holds
+        ``ballast_force_peak`` (rail, sleeper) [N], the largest sleeper-ballast contact
+        force of each sleeper over the run.
     """
     o = RunOptions() if options is None else options
     if isinstance(vehicle, list | tuple):

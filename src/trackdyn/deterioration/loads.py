@@ -9,6 +9,13 @@ cycle at a sleeper is the largest force that sleeper carries over all positions 
 wheel (self-weight included), so a hanging sleeper's share shows at its neighbours.
 Positions the run did not reach (near the ends of the section) take the loads of the
 nearest point it reached.
+
+With ``[run] track = "discrete"`` the vehicles run on the discretely supported track
+(`trackdyn.track.discrete`) built on the ballast as it stands (its rail-seat stiffness and
+gaps), and a wheel's load cycle at a sleeper is the largest sleeper-ballast force of that
+sleeper while the wheel was the nearest on its rail (`discrete_passage_loads`): the
+dynamic response of rail, pads, sleepers and gaps, in place of the quasi-static beam.
+Within a tonnage step these loads stay those of the step's start.
 """
 
 from __future__ import annotations
@@ -19,6 +26,8 @@ import numpy as np
 
 from trackdyn.errors import TrackdynInputError
 from trackdyn.simulation import run_batch, time_step
+from trackdyn.solver.discrete import stable_step
+from trackdyn.track.discrete import DiscreteParameters, discrete_track
 from trackdyn.track.track import RAILS, LinearisedTrack
 from trackdyn.vehicle.models import build_model
 
@@ -99,6 +108,37 @@ def passage_loads(run, ballast, state, model) -> np.ndarray:
     return out
 
 
+def discrete_passage_loads(run, model) -> np.ndarray:
+    """Load cycle of every wheel at every sleeper of its rail in one passage on the discrete
+    track: the largest sleeper-ballast force while the wheel was the nearest on its rail [N].
+
+    Sleepers beyond the stretch a wheel ran over take the value of the nearest sleeper it
+    ran over.
+
+    Parameters
+    ----------
+    run : trackdyn.simulation.Run
+        The solved run on the discrete track.
+    model : trackdyn.vehicle.assembly.Model
+        The model of the run.
+
+    Returns
+    -------
+    ndarray
+        Shape (wheels, sleepers) [N], wheels in the order of `wheels`.
+    """
+    peak = run.out["ballast_wheel_peak"]
+    pos = run.problem.inputs.lin.track.supports.position
+    out = np.empty_like(peak)
+    for j, (_, x, _) in enumerate(wheels(model)):
+        reached = np.flatnonzero((pos >= run.centre[0] + x) & (pos <= run.centre[-1] + x))
+        nearest = np.clip(np.searchsorted(pos[reached], pos), 0, reached.size - 1)
+        before = np.clip(nearest - 1, 0, reached.size - 1)
+        closer = np.abs(pos[reached][before] - pos) < np.abs(pos[reached][nearest] - pos)
+        out[j] = peak[j, reached[np.where(closer, before, nearest)]]
+    return out
+
+
 class TrafficRun:
     """One vehicle of the traffic, run over the track as it stands at each step.
 
@@ -120,15 +160,21 @@ class TrafficRun:
         self.weights = cycles_per_passage(self.model) * traffic.passages_per_mgt
         self.rails = [RAILS.index(r) for _, _, r in wheels(self.model)]
         dt = options.run.dt_s or time_step(self.model, lin, traffic.speed)[0]
+        self.discrete = DiscreteParameters(rail=options.rail, sleeper_mass=options.sleeper_mass)
+        if options.run.track == "discrete" and options.run.dt_s is None:
+            load = traffic.vehicle.static_wheel_load
+            dt = min(dt, stable_step(discrete_track(lin, self.discrete), load))
         every = max(1, int(options.output_spacing / (traffic.speed * dt)))
         self.run = options.run.with_(speed_kmh=traffic.speed * 3.6, dt_s=dt, store_every=every)
 
 
-def vehicle_runs(runs, lins: list[LinearisedTrack], timing: dict) -> list:
+def vehicle_runs(runs, lins: list[LinearisedTrack], timing: dict, ballast=None,
+                 state=None) -> list:  # fmt: skip
     """Run every vehicle of the traffic once over the track as it stands.
 
     The vehicles run side by side in one batch (`trackdyn.simulation.run_batch`), each
-    over its own linearisation of the track; only the solver's arrays come back, no
+    over its own linearisation of the track, or on the discrete track of the ballast's
+    rail-seat stiffness and ``state``'s gaps; only the solver's arrays come back, no
     Datasets. Adds the seconds spent to ``timing["vehicle"]``.
 
     Parameters
@@ -139,6 +185,10 @@ def vehicle_runs(runs, lins: list[LinearisedTrack], timing: dict) -> list:
         The current track linearised about each run's static wheel load.
     timing : dict
         Seconds spent so far, by part.
+    ballast : Ballast, optional
+        The ballast model of the section (needed for runs on the discrete track).
+    state : BallastState, optional
+        Its current state.
 
     Returns
     -------
@@ -149,7 +199,13 @@ def vehicle_runs(runs, lins: list[LinearisedTrack], timing: dict) -> list:
         return []
     clock = time.perf_counter()
     vehicles = [run.traffic.vehicle for run in runs]
-    solved = run_batch(vehicles, list(lins), [run.run for run in runs])
+    tracks = [
+        discrete_track(lin, run.discrete, stiffness=ballast.stiffness, gap=state.gap)
+        if run.run.track == "discrete"
+        else lin
+        for run, lin in zip(runs, lins, strict=True)
+    ]
+    solved = run_batch(vehicles, tracks, [run.run for run in runs])
     timing["vehicle"] += time.perf_counter() - clock
     for result in solved:
         if isinstance(result, Exception):
@@ -160,7 +216,8 @@ def vehicle_runs(runs, lins: list[LinearisedTrack], timing: dict) -> list:
 def rail_seat_loads(runs, solved, ballast, state, timing: dict) -> list:
     """Load cycles of one passage of each vehicle, (wheels, sleepers) [N] per run.
 
-    The wheel loads of each run go onto the rail beam on ``state`` (`passage_loads`).
+    The wheel loads of each run go onto the rail beam on ``state`` (`passage_loads`); a run
+    on the discrete track gives them itself (`discrete_passage_loads`).
     Adds the seconds spent to ``timing["beam"]``.
 
     Parameters
@@ -177,7 +234,11 @@ def rail_seat_loads(runs, solved, ballast, state, timing: dict) -> list:
         Seconds spent so far, by part.
     """
     clock = time.perf_counter()
-    loads = [passage_loads(done, ballast, state, run.model)
-             for run, done in zip(runs, solved, strict=True)]  # fmt: skip
+    loads = [
+        discrete_passage_loads(done, run.model)
+        if run.run.track == "discrete"
+        else passage_loads(done, ballast, state, run.model)
+        for run, done in zip(runs, solved, strict=True)
+    ]
     timing["beam"] += time.perf_counter() - clock
     return loads

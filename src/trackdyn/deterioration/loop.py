@@ -359,7 +359,7 @@ def predict(track: Track, traffic, law, options=None, *, zones=(), progress=Fals
             current = {p: ballast.linearised(lin, state, geometry) for p, lin in lins.items()}
             timing["beam"] += time.perf_counter() - clock
             step_lins = [current[run.lin.static_load] for run in runs]
-            solved = vehicle_runs(runs, step_lins, timing)
+            solved = vehicle_runs(runs, step_lins, timing, ballast, state)
             target = snap_at[np.searchsorted(snap_at, mgt, side="right")]
             if maint is not None:
                 target = min(target, maint.next_due(mgt))

@@ -68,6 +68,93 @@ _EXPONENT = 0x7FF0000000000000
 """Exponent bits of a float64, all set for inf and NaN (a test that ``fastmath`` keeps)."""
 
 
+@njit(cache=True, inline="always")
+def wedge_step(dw_idx, dw_val, H, jinv, wedge, z, q1, inv2dt, max_iter,
+               vfree, rhs, v, f_up, f_down, F, state):  # fmt: skip
+    """The wedge friction forces ``F`` and velocities ``v`` of a step (Newton, see above).
+
+    ``q1`` is the next displacement without the wedge forces, ``z = [q0, q-1]``; ``state``
+    holds each wedge's stick/slip state from step to step. Returns False if Newton did not
+    converge in ``max_iter`` iterations.
+    """
+    n = q1.shape[0]
+    nw = dw_idx.shape[0]
+    # wedge velocities if no friction acted, v = Dw (q1 - q-1) / 2Δt
+    for w in range(nw):
+        dd = 0.0
+        vv = 0.0
+        for j in range(dw_idx.shape[1]):
+            col = dw_idx[w, j]
+            dd += dw_val[w, j] * z[col]
+            vv += dw_val[w, j] * (q1[col] - z[n + col])
+        vfree[w] = vv * inv2dt
+        normal = wedge[w, 0] + dd
+        if normal < 0.0:
+            normal = 0.0
+        f_up[w] = normal * wedge[w, 1]
+        f_down[w] = normal * wedge[w, 2]
+    converged = False
+    for _ in range(max_iter):
+        mask = 0
+        for w in range(nw):
+            if state[w] == 0:
+                F[w] = 0.0
+                mask |= 1 << w
+            elif state[w] == 1:
+                F[w] = f_up[w]
+            else:
+                F[w] = -f_down[w]
+        for w in range(nw):
+            r = vfree[w]
+            for u in range(nw):
+                r -= H[w, u] * F[u]
+            rhs[w] = r
+        same = True
+        for w in range(nw):
+            vv = 0.0
+            for u in range(nw):
+                vv += jinv[mask, w, u] * rhs[u]
+            v[w] = vv
+            f = wedge[w, 3] * vv
+            new = 1 if f > f_up[w] else (2 if f < -f_down[w] else 0)
+            if new != state[w]:
+                same = False
+                state[w] = new
+        if same:
+            converged = True
+            break
+    if not converged:
+        return False
+    for w in range(nw):
+        if state[w] == 0:
+            F[w] = wedge[w, 3] * v[w]
+    return True
+
+
+@njit(cache=True, inline="always")
+def store_vehicle(z, q1, F, v, ds_idx, ds_val, inv2dt, invdt2, row,
+                  out_q, out_v, out_a, out_secondary, out_fw, out_vw):  # fmt: skip
+    """Write the step's displacement, velocity, acceleration, secondary displacement and
+    wedge force and velocity to row ``row`` of the outputs; False if ``q0`` is not finite."""
+    n = q1.shape[0]
+    z_bits = z.view(np.int64)
+    for i in range(n):
+        if z_bits[i] & _EXPONENT == _EXPONENT:
+            return False
+        out_q[row, i] = z[i]
+        out_v[row, i] = (q1[i] - z[n + i]) * inv2dt
+        out_a[row, i] = (q1[i] - 2.0 * z[i] + z[n + i]) * invdt2
+    for u in range(ds_idx.shape[0]):
+        d = 0.0
+        for j in range(ds_idx.shape[1]):
+            d += ds_val[u, j] * z[ds_idx[u, j]]
+        out_secondary[row, u] = d
+    for w in range(F.shape[0]):
+        out_fw[row, w] = F[w]
+        out_vw[row, w] = v[w]
+    return True
+
+
 @njit(cache=True, fastmath=True, error_model="numpy")
 def advance(
     p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dc_idx, dc_val, dw_idx, dw_val,
@@ -104,7 +191,6 @@ def advance(
     f_down = np.empty(nw)
     F = np.zeros(nw)
     state = np.zeros(nw, np.int64)  # 0 stick, 1 slip in compression, 2 slip in extension
-    z_bits = z.view(np.int64)
     stored = 0
     to_store = -step0 % store_every  # steps until the next stored one (no modulo per step)
     for s in range(k_in.shape[0]):
@@ -127,68 +213,22 @@ def advance(
             f = fc[c]
             for j in range(gc_idx.shape[1]):
                 q1[gc_idx[c, j]] -= gc_val[c, j] * f
-        if nw > 0:
-            # wedge velocities if no friction acted, v = Dw (q1 - q-1) / 2Δt
-            for w in range(nw):
-                dd = 0.0
-                vv = 0.0
-                for j in range(dw_idx.shape[1]):
-                    col = dw_idx[w, j]
-                    dd += dw_val[w, j] * z[col]
-                    vv += dw_val[w, j] * (q1[col] - z[n + col])
-                vfree[w] = vv * inv2dt
-                normal = wedge[w, 0] + dd
-                if normal < 0.0:
-                    normal = 0.0
-                f_up[w] = normal * wedge[w, 1]
-                f_down[w] = normal * wedge[w, 2]
-            converged = False
-            for _ in range(max_iter):
-                mask = 0
-                for w in range(nw):
-                    if state[w] == 0:
-                        F[w] = 0.0
-                        mask |= 1 << w
-                    elif state[w] == 1:
-                        F[w] = f_up[w]
-                    else:
-                        F[w] = -f_down[w]
-                for w in range(nw):
-                    r = vfree[w]
-                    for u in range(nw):
-                        r -= H[w, u] * F[u]
-                    rhs[w] = r
-                same = True
-                for w in range(nw):
-                    vv = 0.0
-                    for u in range(nw):
-                        vv += jinv[mask, w, u] * rhs[u]
-                    v[w] = vv
-                    f = wedge[w, 3] * vv
-                    new = 1 if f > f_up[w] else (2 if f < -f_down[w] else 0)
-                    if new != state[w]:
-                        same = False
-                        state[w] = new
-                if same:
-                    converged = True
-                    break
-            if not converged:
-                return NEWTON_FAILED, s
-            for w in range(nw):
-                if state[w] == 0:
-                    F[w] = wedge[w, 3] * v[w]
+        if nw > 0 and not wedge_step(
+            dw_idx, dw_val, H, jinv, wedge, z, q1, inv2dt, max_iter,
+            vfree, rhs, v, f_up, f_down, F, state,
+        ):  # fmt: skip
+            return NEWTON_FAILED, s
         for w in range(nw):
             f = F[w]
             for j in range(gw_idx.shape[1]):
                 q1[gw_idx[w, j]] -= gw_val[w, j] * f
         if to_store == 0:
             to_store = store_every
-            for i in range(n):
-                if z_bits[i] & _EXPONENT == _EXPONENT:
-                    return NOT_FINITE, s
-                out_q[stored, i] = z[i]
-                out_v[stored, i] = (q1[i] - z[n + i]) * inv2dt
-                out_a[stored, i] = (q1[i] - 2.0 * z[i] + z[n + i]) * invdt2
+            if not store_vehicle(
+                z, q1, F, v, ds_idx, ds_val, inv2dt, invdt2, stored,
+                out_q, out_v, out_a, out_secondary, out_fw, out_vw,
+            ):  # fmt: skip
+                return NOT_FINITE, s
             for c in range(nc):
                 dv = 0.0
                 for j in range(dc_idx.shape[1]):
@@ -196,14 +236,6 @@ def advance(
                 out_wl[stored, c] = static_load + (fc[c] + contact[c, 0] * dv) / contact[c, 1]
                 out_k[stored, c] = k_in[s, c]
                 out_r[stored, c] = r_in[s, c]
-            for u in range(ds_idx.shape[0]):
-                d = 0.0
-                for j in range(ds_idx.shape[1]):
-                    d += ds_val[u, j] * z[ds_idx[u, j]]
-                out_secondary[stored, u] = d
-            for w in range(nw):
-                out_fw[stored, w] = F[w]
-                out_vw[stored, w] = v[w]
             stored += 1
         to_store -= 1
         for i in range(n):
