@@ -6,7 +6,7 @@ neighbours' hangs. The rail of each side is a `trackdyn.beam.railseat.RailBeam`:
 one linear, tensionless spring per sleeper with the stiffness equivalent to the measured
 ``k2`` (eq 5.7 times the spacing, `LinearisedTrack.support_stiffness`) behind a gap. The
 gap at the start is the sleeper's seating gap in excess of the median of its neighbours
-(±`VOID_NEIGHBOURS` sleepers): a void under that sleeper alone; the common part is
+(`trackdyn.track.discrete.void_gap`): a void under that sleeper alone; the common part is
 seating of the whole track and stays in the measured linearisation. A freshly tamped
 start (``seated``) closes these voids. Settlement ``b`` [m] adds to the gap.
 
@@ -45,16 +45,13 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from scipy.ndimage import median_filter
 
 from trackdyn.beam.railseat import RailBeam, RailRest, Windows, rest_state
 from trackdyn.errors import TrackdynInputError, shown
+from trackdyn.track.discrete import void_gap
 from trackdyn.track.synthetic import correlated_field
 from trackdyn.track.track import RAILS, Geometry, LinearisedTrack
 from trackdyn.units import GRAVITY
-
-VOID_NEIGHBOURS = 5
-"""Sleepers each side whose median seating gap counts as seating of the whole track."""
 
 MAX_RATE_COV = 3.0
 """Largest settlement-rate coefficient of variation accepted [-]: a typing error beyond
@@ -97,12 +94,6 @@ def rate_field(n: int, spacing: float, cov: float, correlation_length: float, se
          for _ in RAILS]  # fmt: skip
     sigma = np.sqrt(np.log1p(cov**2))
     return np.exp(sigma * np.array(z) - sigma**2 / 2)
-
-
-def excess_gap(seating_gap: np.ndarray) -> np.ndarray:
-    """Seating gap in excess of the median of the neighbours, per rail and sleeper [m]."""
-    size = (1, 2 * VOID_NEIGHBOURS + 1)
-    return np.maximum(seating_gap - median_filter(seating_gap, size=size, mode="nearest"), 0.0)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -172,7 +163,7 @@ class Ballast:
         self.position, self.delta, self.weight = pos, lin.delta, weight
         self.beams = [RailBeam(pos, kd[r], weight, rail.EI, half) for r in range(len(RAILS))]
         self.windows = [Windows(b) for b in self.beams]
-        void = excess_gap(lin.seating_gap())
+        void = void_gap(lin.seating_gap())
         self.reseat = void if seated else np.zeros_like(void)  # closed by tamping [m]
         self.void = void - self.reseat
         self.initial = self.state(np.zeros_like(self.void))
