@@ -184,6 +184,9 @@ def calibrate(
 
     converged = job(calibration, out, overwrite, workers, scheduler, console)
     if not converged and not allow_not_converged:
-        print("error: the fit did not converge within fit.max_iterations (files written, "
-              "marked not converged); raise it, or pass --allow-not-converged", file=sys.stderr)
+        print(
+            "error: the fit did not converge within fit.max_iterations (files written, "
+            "marked not converged); raise it, or pass --allow-not-converged",
+            file=sys.stderr,
+        )
         raise typer.Exit(1)

@@ -4,10 +4,12 @@ The factor ``f = exp(u)`` multiplies every settlement increment of a rail seat
 (`trackdyn.deterioration.ballast.rate_field`). Around a run with the field ``u0``, the
 D1-band change the model predicts for survey ``k`` is linearised in ``u``: a rail seat
 whose ballast settled ``b_k`` by then settles ``b_k (u - u0)`` more, and the rail, resting
-on it, follows, interpolated linearly between sleepers as the loop's unloaded profile is
-(the rail's bridging of single sleepers is left to the next run). The deeper dips raise
-the loads there, so the prediction moves more than that; a gain ``g`` measured between the
-runs on two fields (`feedback_gain`) scales it. With ``M`` the D1 band-pass of that
+on it, follows, interpolated linearly between sleepers as the loop's unloaded profile is,
+and bridging short waves as a rail on springs does (`rail_transfer`, every sleeper
+bearing; a sleeper that hangs is left to the next run). The loads follow the new dips
+and a sleeper that settles more sheds load to its neighbours, so the prediction moves
+otherwise than that; a gain ``g`` measured between the runs on two fields
+(`feedback_gain`) scales it. With ``M`` the D1 band-pass of that
 interpolation at the residual points, per rail::
 
     y_k = measured_k - predicted_k(u0) + g M (b_k u0) = g M diag(b_k) u + e,   e ~ N(0, σ² I)
@@ -39,16 +41,22 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import minimize_scalar
+from scipy.linalg import solveh_banded
+from scipy.optimize import brentq, minimize_scalar
 
+from trackdyn.beam.elements import stiffness_band
 from trackdyn.calibration.problem import compare
-from trackdyn.deterioration.ballast import RAIL_CORRELATION
+from trackdyn.deterioration.ballast import MAX_RATE_COV, RAIL_CORRELATION
 from trackdyn.track.quality import longitudinal_level
 from trackdyn.track.track import RAILS
 
 JITTER = 1e-9
 """Added to the eigenvalues' floor of the prior correlation [-] (a Gaussian correlation
 matrix is numerically singular)."""
+
+MAX_PRIOR_SD = float(np.sqrt(np.log1p(MAX_RATE_COV**2)))
+"""Largest standard deviation of ``ln factor`` the strength may reach [-]: that of the
+largest coefficient of variation the deterioration model accepts."""
 
 GAIN_RANGE = (0.5, 3.0)
 """Bounds of `feedback_gain` [-]: beyond, the two runs are too far apart to say."""
@@ -92,8 +100,33 @@ class FieldEstimate:
         return float(np.sqrt(np.expm1(self.prior_sd**2)))
 
 
-def band_matrix(x, position) -> np.ndarray:
-    """D1 band-pass of the linear interpolation from sleepers to ``x``, (points, sleepers).
+def rail_transfer(position, stiffness, EI: float) -> np.ndarray:
+    """Rail deflection at each sleeper per unit ballast level under each, every sleeper
+    bearing, (sleepers, sleepers) [-]: ``(K + D)⁻¹ D`` with ``K`` the rail's beam stiffness
+    (`trackdyn.beam.elements.stiffness_band`, deflection and rotation per sleeper) and
+    ``D`` the support springs on the deflections. A short wave of settlement is bridged.
+
+    Parameters
+    ----------
+    position : ndarray
+        Sleeper positions [m].
+    stiffness : ndarray
+        Support stiffness per sleeper [N/m].
+    EI : float
+        Rail bending stiffness [N m^2].
+    """
+    n = position.size
+    band = stiffness_band(position, EI)
+    band[-1, 0::2] += stiffness
+    rhs = np.zeros((2 * n, n))
+    rhs[2 * np.arange(n), np.arange(n)] = stiffness
+    return solveh_banded(band, rhs)[0::2]
+
+
+def band_matrix(x, position, transfer=None) -> np.ndarray:
+    """D1 band-pass at ``x`` of the rail's deflection per unit settlement of each sleeper
+    (``transfer``, `rail_transfer`; default: the rail follows), linearly interpolated
+    between sleepers, (points, sleepers) [-].
 
     Parameters
     ----------
@@ -101,9 +134,12 @@ def band_matrix(x, position) -> np.ndarray:
         Distances of the compared points [m].
     position : ndarray
         Sleeper positions [m].
+    transfer : ndarray, optional
+        (sleepers, sleepers) rail deflection per unit settlement [-].
     """
-    columns = [longitudinal_level(x, np.interp(x, position, unit), "D1")
-               for unit in np.eye(position.size)]  # fmt: skip
+    transfer = np.eye(position.size) if transfer is None else transfer
+    columns = [longitudinal_level(x, np.interp(x, position, column), "D1")
+               for column in transfer.T]  # fmt: skip
     return np.array(columns).T
 
 
@@ -153,19 +189,19 @@ def linearise(problem, ds, log_factor, band, gain: float = 1.0) -> Linearised:
         A run of the fitted tonnage with the field ``log_factor``.
     log_factor : ndarray
         (2, sleepers) ``ln factor`` of that run [-].
-    band : ndarray
-        `band_matrix` of the problem.
+    band : sequence of ndarray
+        `band_matrix` of the problem per rail.
     gain : float
         Measured over the linearised change of the prediction (`feedback_gain`) [-].
     """
     n = problem.position.size
-    rows = gain * band[problem.use] * 1e3  # mm of D1 change per m of settlement
     comparison = compare(problem, ds)
     blocks, y = [], []
     for k in np.flatnonzero(problem.fitted):
         at = int(np.argmin(np.abs(ds.mgt.values - problem.mgt[k])))
         settled = ds.settlement.values[at]  # (rail, sleeper) [m]
         for r in range(len(RAILS)):
+            rows = gain * band[r][problem.use] * 1e3  # mm of D1 change per m of settlement
             a = np.zeros((rows.shape[0], 2 * n))
             a[:, r * n : (r + 1) * n] = rows * settled[r]
             miss = (comparison.measured[k, r] - comparison.predicted[k, r])[problem.use] * 1e3
@@ -175,9 +211,8 @@ def linearise(problem, ds, log_factor, band, gain: float = 1.0) -> Linearised:
 
 
 def feedback_gain(problem, before, after, change, band) -> float:
-    """How much more the prediction changed between two runs than the linearisation says
-    [-], least squares over the residual points: the settlement a higher factor adds
-    deepens the dips, which raises the loads there (`GAIN_RANGE` bounds it).
+    """How the prediction changed between two runs over what the linearisation says [-],
+    least squares over the residual points (`GAIN_RANGE` bounds it).
 
     Parameters
     ----------
@@ -187,8 +222,8 @@ def feedback_gain(problem, before, after, change, band) -> float:
         Runs with the same law, on the field ``u0`` and on ``u0 + change``.
     change : ndarray
         (2, sleepers) change of ``ln factor`` [-].
-    band : ndarray
-        `band_matrix` of the problem.
+    band : sequence of ndarray
+        `band_matrix` of the problem per rail.
     """
     lin = linearise(problem, before, np.zeros_like(change), band)
     linear = lin.a @ change.ravel()
@@ -251,7 +286,8 @@ class Evidence:
 
 def evidence(lin: Linearised, prior: Prior) -> Evidence:
     """`Evidence` of the linearised surveys: ``λ`` and ``σ²`` of largest marginal
-    likelihood (``σ²`` profiled out, ``λ`` by bounded scalar search on ``ln λ``)."""
+    likelihood (``σ²`` profiled out, ``λ`` by bounded scalar search on ``ln λ``), with
+    ``τ`` at most `MAX_PRIOR_SD`."""
     g = lin.a @ prior.root
     eig, v = np.linalg.eigh(g @ g.T)
     eig = np.maximum(eig, 0.0)
@@ -262,7 +298,15 @@ def evidence(lin: Linearised, prior: Prior) -> Evidence:
         return m * np.log(np.sum(yv**2 / s) / m) + np.sum(np.log(s))
 
     best = minimize_scalar(minus_log_evidence, bounds=LOG_STRENGTH_RANGE, method="bounded")
-    lam = float(np.exp(best.x))
+    log_lam = float(best.x)
+
+    def excess(log_lam):  # ln τ² - ln τ_max², τ² = λ σ²(λ) rising with λ
+        s = 1.0 + np.exp(log_lam) * eig
+        return log_lam + np.log(np.sum(yv**2 / s) / m) - 2 * np.log(MAX_PRIOR_SD)
+
+    if excess(log_lam) > 0:
+        log_lam = brentq(excess, LOG_STRENGTH_RANGE[0], log_lam)
+    lam = float(np.exp(log_lam))
     s = 1.0 + lam * eig
     w = v @ (yv / s)
     return Evidence(lam, float(np.sum(yv**2 / s) / m), w, np.sqrt(lam) * (g.T @ w),

@@ -1,16 +1,17 @@
 """The least-squares fit of a calibration (`trackdyn.calibration.problem`).
 
 With ``fit.rate_field = "estimate"`` (the default) each rail seat's settlement-rate factor
-is fitted with the global parameters: first the global fit on uniform ballast; then
-rounds, each of which estimates the field at the current values
+is fitted with the global parameters. Round 1 is the global fit on uniform ballast
+(soft-L1 loss). Each later round estimates the field at the current values
 (`trackdyn.calibration.field`: linearised about a run, strength by marginal likelihood),
 runs on it, and fits the global parameters again with the field profiled out: every
-evaluation's residual is the misfit left with the field of largest posterior density for
-those parameters plus that field's prior penalty (variable projection; Golub and Pereyra
-2003), so that the parameters are not held to a field estimated for others. Its
-Jacobian is taken once per round (chord iterations). Rounds end when no fit coordinate
-moves by more than `ROUND_TOLERANCE`, or after `FIELD_ROUNDS`. The standard errors of the
-global parameters come from the last round's Jacobian, with the field profiled out.
+evaluation's residual is a vector whose norm is a monotone function of the surveys'
+marginal likelihood with the field integrated out and its strength and the noise at their
+best (`FieldRound`; variable projection, Golub and Pereyra 2003), so that the parameters
+are not held to a field estimated for others. Its Jacobian is taken once per round (chord
+iterations). Rounds end when no fit coordinate moves by more than `ROUND_TOLERANCE`, or
+after `FIELD_ROUNDS`. The standard errors of the global parameters come from the last
+round's Jacobian, with the field profiled out.
 
 Every evaluation of the misfit at a point also runs its forward-difference neighbours in
 the same batch of Dask tasks, so a Jacobian's ``n + 1`` model runs go to ``n + 1``
@@ -41,6 +42,7 @@ from trackdyn.calibration.field import (
     evidence,
     feedback_gain,
     linearise,
+    rail_transfer,
 )
 from trackdyn.calibration.problem import (
     FD_STEP,
@@ -56,7 +58,7 @@ FAILED_RUN_MM = 100.0
 """Residual given to every comparison point of a trial whose run failed (settlement that
 ran away past the plausible profile, too many steps) [mm]: the optimiser steps back."""
 
-FIELD_ROUNDS = 8
+FIELD_ROUNDS = 6
 """Most rounds of field estimate and global fit after the first global fit [-]."""
 
 ROUND_TOLERANCE = 0.01
@@ -262,17 +264,27 @@ class FieldRound:
         return estimate(lin, self.prior, self.problem.position, observed, ev.lam, ev.sigma2)
 
 
-def _field_rounds(problem, obj, res, workers, scheduler, log):
-    """Rounds of field estimate and global fit with the field profiled out (module
-    docstring); returns the last round's objective and optimiser result, the problem on
-    the final field, the field, and the rounds."""
-    band = band_matrix(problem.x, problem.position)
+def _field_rounds(problem, workers, scheduler, log):
+    """The global fit on uniform ballast, then rounds of global fit with the field profiled
+    out, each linearised about the field estimated at the end of the one before (module
+    docstring); returns the last round's
+    objective and optimiser result, the problem on the final field, the field, the rounds
+    and the model runs of all rounds."""
+    band = [band_matrix(problem.x, problem.position,
+                        rail_transfer(problem.position, k, problem.EI))
+            for k in problem.stiffness]  # fmt: skip
     prior = Prior(problem.position, problem.spec.settlement.rate_correlation_length_m)
     x = problem.x[problem.valid]
     observed = (problem.position >= x[0]) & (problem.position <= x[-1])
     round_ = FieldRound(problem, np.zeros((2, problem.position.size)), band, prior)
-    for rounds in range(1, FIELD_ROUNDS + 1):
+    obj = Objective(problem, workers, scheduler, log)
+    if log:
+        log("round 1: the global fit on uniform ballast:")
+    res = _global_fit(obj, np.clip(problem.start(), problem.lower, problem.upper))
+    runs, rounds = 0, 1
+    for rounds in range(2, FIELD_ROUNDS + 1):
         before = obj.dataset(res.x)
+        runs += obj.runs
         field = round_.field(before, observed)
         current = problem.with_field(field.factor)
         obj = Objective(current, workers, scheduler, log, chord=True)
@@ -281,14 +293,14 @@ def _field_rounds(problem, obj, res, workers, scheduler, log):
         round_ = FieldRound(current, field.log_factor, band, prior, gain)
         obj.residual = round_
         if log:
-            log(f"round {rounds}: rate field estimated (cov {field.cov:.2f}, noise "
-                f"{field.noise_mm:.3f} mm, gain {gain:.2f}); the global fit with the field "
-                "profiled out:")  # fmt: skip
-        start, res = res.x, _global_fit(obj, res.x, loss="linear")
+            log(f"round {rounds}: the global fit with the field profiled out, on the field "
+                f"estimated (cov {field.cov:.2f}, noise {field.noise_mm:.3f} mm, gain "
+                f"{gain:.2f}):")  # fmt: skip
+        start, res = res.x, _global_fit(obj, res.x, "linear")
         if np.max(np.abs(res.x - start)) < ROUND_TOLERANCE:
             break
     field = round_.field(obj.dataset(res.x), observed)
-    return obj, res, problem.with_field(field.factor), field, rounds
+    return obj, res, problem.with_field(field.factor), field, rounds, runs + obj.runs
 
 
 def fit(problem: Calibration, *, workers=None, scheduler=None, log=None) -> FitResult:
@@ -306,15 +318,13 @@ def fit(problem: Calibration, *, workers=None, scheduler=None, log=None) -> FitR
     log : callable, optional
         Called with a one-line progress message after each batch of runs.
     """
-    obj = Objective(problem, workers, scheduler, log)
-    objectives = [obj]
-    res = _global_fit(obj, np.clip(problem.start(), problem.lower, problem.upper))
-    field, rounds, current = None, 0, problem
     if problem.spec.fit.rate_field == "estimate":
-        obj, res, current, field, rounds = _field_rounds(problem, obj, res, workers,
-                                                          scheduler, log)  # fmt: skip
-        objectives.append(obj)
+        obj, res, current, field, rounds, runs = _field_rounds(problem, workers, scheduler, log)
+    else:
+        obj, field, rounds, current = Objective(problem, workers, scheduler, log), None, 0, problem
+        res = _global_fit(obj, np.clip(problem.start(), problem.lower, problem.upper))
     r, J = obj.fun(res.x), obj.jac(res.x)
+    runs = obj.runs if field is None else runs
     data = r[: 2 * int(problem.use.sum()) * int(problem.fitted.sum())]  # not the penalty
     sigma = MAD_SCALE * float(np.median(np.abs(data)))
     normal = J.T @ J
@@ -339,7 +349,7 @@ def fit(problem: Calibration, *, workers=None, scheduler=None, log=None) -> FitR
         comparison=fitted,
         start_comparison=start,
         evaluations=int(res.nfev),
-        runs=sum(o.runs for o in objectives) + 2,
+        runs=runs + 2,
         message=str(res.message),
         converged=res.status != 0,
         field=field,

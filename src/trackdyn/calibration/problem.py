@@ -45,10 +45,12 @@ from trackdyn.calibration.surveys import (
     read_survey,
 )
 from trackdyn.deterioration.law_files import law_bounds, law_file_table, law_units
+from trackdyn.deterioration.loop import NO_TRAFFIC_LOAD
 from trackdyn.deterioration.runs import Section, SectionTask, run_section, run_sections
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import read_supports
 from trackdyn.track.quality import WAVEBANDS
+from trackdyn.track.rails import rail_section
 from trackdyn.track.track import Geometry, Track
 from trackdyn.units import UNITS
 
@@ -108,6 +110,11 @@ class Calibration:
         Loop options to the last survey; ``fit_options`` to the last fitted one.
     position : ndarray
         Sleeper positions of the supports file [m].
+    stiffness : ndarray
+        (2 rails, sleepers) support stiffness per rail seat, the first survey linearised
+        about the heaviest static wheel load of the traffic (as the loop's rail beam) [N/m].
+    EI : float
+        Bending stiffness of the rail [N m^2].
     """
 
     spec: object
@@ -132,12 +139,15 @@ class Calibration:
     options: object
     fit_options: object
     position: np.ndarray
+    stiffness: np.ndarray
+    EI: float
 
     def with_field(self, factor) -> Calibration:
         """This calibration run on the settlement-rate ``factor`` (2, sleepers) [-]."""
         given = {"rate_factor": tuple(tuple(float(f) for f in row) for row in factor)}
-        return dataclasses.replace(self, options=self.options.model_copy(update=given),
-                                   fit_options=self.fit_options.model_copy(update=given))  # fmt: skip
+        options = self.options.model_copy(update=given)
+        fit_options = self.fit_options.model_copy(update=given)
+        return dataclasses.replace(self, options=options, fit_options=fit_options)
 
     @property
     def fitted_extent(self) -> tuple[float, float]:
@@ -257,10 +267,15 @@ def prepare(spec, base: Path, traffic, law, options) -> Calibration:
     })  # fmt: skip
     fit_options = options.model_copy(update={"total_mgt": float(mgt[fitted].max())})
     section = Section("calibration", str(files[0].resolve()), str(supports_file.resolve()))
+    EI = rail_section(options.rail).EI
+    heaviest = max((t.vehicle.static_wheel_load for t in traffic), default=NO_TRAFFIC_LOAD)
+    lin = Track(geometries[0], supports).linearise(heaviest, options.run.delta,
+                                                   extrapolate=options.run.extrapolate)  # fmt: skip
     first = profiles_at(geometries[0], 0.0, x)
     return Calibration(spec, base, section, tuple(traffic), law, names, log, lower, upper, mgt,
                    tuple(alignments), grid, x, tuple(geometries), first, valid, use, fitted,
-                   units, options, fit_options, supports.position)  # fmt: skip
+                   units, options, fit_options, supports.position,
+                   lin.support_stiffness(EI), EI)  # fmt: skip
 
 
 def run_laws(problem: Calibration, laws, options, *, workers=None, scheduler=None,

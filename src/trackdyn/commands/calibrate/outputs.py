@@ -181,7 +181,9 @@ def parameter_file(problem: Calibration, result: FitResult, where: str) -> str:
                       strict=True))  # fmt: skip
     lo, hi = problem.fitted_extent
     if result.field is None:
-        ballast = "# Settlement-rate field: uniform (factor 1 at every rail seat, fit.rate_field).\n"
+        ballast = (
+            "# Settlement-rate field: uniform (factor 1 at every rail seat, fit.rate_field).\n"
+        )
     else:
         ballast = (
             "# Settlement-rate field: estimated per rail seat with these values, in\n"
@@ -202,8 +204,9 @@ def parameter_file(problem: Calibration, result: FitResult, where: str) -> str:
             factor = UNITS[entry["unit"]][1]
             entry["value"] = value / factor
             entry["source"] = (
-                f"{status(problem, result)} by trackdyn calibrate ({Path(where).name}) to the D1-band change of "
-                f"the surveys {surveys}; standard error {se / factor:.3g} {entry['unit']}"
+                f"{status(problem, result)} by trackdyn calibrate ({Path(where).name}) to "
+                f"the D1-band change of the surveys {surveys}; standard error "
+                f"{se / factor:.3g} {entry['unit']}"
             )
         elif name in s.overrides:
             entry = {"value": s.overrides[name], "unit": si_unit,

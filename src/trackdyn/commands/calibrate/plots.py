@@ -68,8 +68,9 @@ def _parity(ax, table) -> None:
         for rail in ("left", "right"):
             g = t[(t.role == role) & (t.rail == rail)]
             if len(g):
+                label = f"{rail} rail, {role} survey"
                 ax.scatter(g.d1_sd_mm, g.d1_sd_predicted_mm, marker=marker, s=22,
-                           color=RAIL_COLOURS[rail], label=f"{rail} rail, {role} survey")  # fmt: skip
+                           color=RAIL_COLOURS[rail], label=label)  # fmt: skip
                 ax.scatter(g.d1_sd_mm, g.d1_sd_predicted_start_mm, marker=marker, s=14,
                            facecolor="none", edgecolor="0.55")  # fmt: skip
     values = t[["d1_sd_mm", "d1_sd_predicted_mm", "d1_sd_predicted_start_mm"]].to_numpy()
@@ -106,7 +107,8 @@ def field_figure(field, extent, path) -> None:
         ax.plot(x, f, color=RAIL_COLOURS[rail], lw=0.9, label="estimated factor")
         ax.axhline(1.0, color="k", lw=0.6)
         for lo, hi in ((x[0], extent[0]), (extent[1], x[-1])):
-            ax.axvspan(lo, hi, color="0.9", label="not compared: the prior" if lo == x[0] else None)
+            ax.axvspan(lo, hi, color="0.9", zorder=0,
+                       label="not compared: the prior" if lo == x[0] else None)  # fmt: skip
         ax.set_ylabel(f"{rail} rail\nsettlement-rate factor [-]")
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))

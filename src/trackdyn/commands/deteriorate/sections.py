@@ -118,8 +118,8 @@ def section_tasks(spec, base: Path, progress: bool = False) -> list[SectionTask]
         if s.rate_field is None:
             return o
         position = load_track(sec.geometry, sec.supports).supports.position
-        return o.model_copy(update={"rate_factor": tuple(
-            tuple(row) for row in read_rate_field(base / s.rate_field, position).tolist())})
+        factor = read_rate_field(base / s.rate_field, position)
+        return o.model_copy(update={"rate_factor": tuple(map(tuple, factor.tolist()))})
 
     return [
         SectionTask(
