@@ -18,14 +18,14 @@ The prior: ``u ~ N(0, τ² C)``, ``C`` the correlation of the deterioration mode
 field (Gaussian, ``exp(-(d/ℓ)²)`` with ``ℓ`` the scenario's ``rate_correlation_length_m``,
 the rails correlated by `trackdyn.deterioration.ballast.RAIL_CORRELATION`), projected so
 that the mean of ``u`` over all rail seats is zero: a common factor is the law's scale
-(K_s), not the field, and stays with the global fit. The strength ``λ = τ² / σ²`` is the
-one of largest marginal likelihood of the surveys (type-II maximum likelihood, σ²
-profiled out; MacKay 1992), found on the eigenvalues of ``A C Aᵀ``; the estimate is the
-posterior mean, its standard error the posterior standard deviation (of ``u``, and
-``f`` times it for the factor, delta method). The factor is then scaled to mean 1 over the
-compared rail seats, the convention of the deterioration model's random field, so that
-the law's scale keeps its meaning there. Rail seats that no compared point sees keep the
-prior: factor 1 (before that scaling), standard error ``τ``.
+(K_s), not the field, and stays with the global fit (so K_s goes with this field: the
+deterioration model's random field has mean factor 1 instead, ``exp(σ²/2)`` above a
+field with mean ``ln factor`` 0). The strength ``λ = τ² / σ²`` is the one of largest
+marginal likelihood of the surveys (type-II maximum likelihood, σ² profiled out; MacKay
+1992), found on the eigenvalues of ``A C Aᵀ``, with ``τ`` at most `MAX_PRIOR_SD`; the
+estimate is the posterior mean, its standard error the posterior standard deviation (of
+``u``, and ``f`` times it for the factor, delta method). Rail seats that no compared point
+sees keep the prior: factor about 1, standard error about ``τ``.
 
 References
 ----------

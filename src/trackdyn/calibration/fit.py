@@ -267,9 +267,8 @@ class FieldRound:
 def _field_rounds(problem, workers, scheduler, log):
     """The global fit on uniform ballast, then rounds of global fit with the field profiled
     out, each linearised about the field estimated at the end of the one before (module
-    docstring); returns the last round's
-    objective and optimiser result, the problem on the final field, the field, the rounds
-    and the model runs of all rounds."""
+    docstring); returns the last round's objective and optimiser result, the problem on
+    the final field, the field, the rounds and the model runs of all rounds."""
     band = [band_matrix(problem.x, problem.position,
                         rail_transfer(problem.position, k, problem.EI))
             for k in problem.stiffness]  # fmt: skip
