@@ -177,16 +177,16 @@ def calibrate(
     Writes settlement_fitted.toml (for deteriorate's [settlement] file), rate_field.csv
     (for its [settlement] rate_field), fit.csv (fitted values and standard errors),
     calibration.csv (misfit and D1 SD per survey, rail and segment), calibration.png and
-    rate_field.png. A fit stopped by fit.max_iterations exits 1 (files written, marked not
-    converged) unless --allow-not-converged.
+    rate_field.png. A fit that did not converge (fit.max_iterations, or the rate field's
+    rounds) exits 1 (files written, marked not converged) unless --allow-not-converged.
     """
     from trackdyn.commands.calibrate import calibrate as job
 
     converged = job(calibration, out, overwrite, workers, scheduler, console)
     if not converged and not allow_not_converged:
         print(
-            "error: the fit did not converge within fit.max_iterations (files written, "
-            "marked not converged); raise it, or pass --allow-not-converged",
+            "error: the fit did not converge (files written, marked not converged, the reason "
+            "above); raise fit.max_iterations, or pass --allow-not-converged",
             file=sys.stderr,
         )
         raise typer.Exit(1)

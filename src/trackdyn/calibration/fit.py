@@ -58,8 +58,10 @@ FAILED_RUN_MM = 100.0
 """Residual given to every comparison point of a trial whose run failed (settlement that
 ran away past the plausible profile, too many steps) [mm]: the optimiser steps back."""
 
-FIELD_ROUNDS = 6
-"""Most rounds of field estimate and global fit after the first global fit [-]."""
+FIELD_ROUNDS = 10
+"""Most rounds of field estimate and global fit, the first on uniform ballast included [-];
+a fit whose last round still moved a parameter by more than `ROUND_TOLERANCE` is not
+converged."""
 
 ROUND_TOLERANCE = 0.01
 """A round whose global fit moves no fit coordinate by more than this is the last [-]
@@ -201,7 +203,10 @@ class FitResult:
     message : str
         The optimiser's reason to stop.
     converged : bool
-        False when the last global fit stopped at ``fit.max_iterations``.
+        False when the last global fit stopped at ``fit.max_iterations``, or the rounds of
+        the rate field at `FIELD_ROUNDS` with the parameters still moving.
+    stopped_by : str
+        What stopped a fit that did not converge (empty when it did).
     field : FieldEstimate or None
         The estimated settlement-rate field; None for ``fit.rate_field = "uniform"``.
     rounds : int
@@ -221,6 +226,7 @@ class FitResult:
     runs: int
     message: str
     converged: bool
+    stopped_by: str
     field: FieldEstimate | None
     rounds: int
 
@@ -280,7 +286,7 @@ def _field_rounds(problem, workers, scheduler, log):
     if log:
         log("round 1: the global fit on uniform ballast:")
     res = _global_fit(obj, np.clip(problem.start(), problem.lower, problem.upper))
-    runs, rounds = 0, 1
+    runs, rounds, settled = 0, 1, False
     for rounds in range(2, FIELD_ROUNDS + 1):
         before = obj.dataset(res.x)
         runs += obj.runs
@@ -296,10 +302,11 @@ def _field_rounds(problem, workers, scheduler, log):
                 f"estimated (cov {field.cov:.2f}, noise {field.noise_mm:.3f} mm, gain "
                 f"{gain:.2f}):")  # fmt: skip
         start, res = res.x, _global_fit(obj, res.x, "linear")
-        if np.max(np.abs(res.x - start)) < ROUND_TOLERANCE:
+        settled = np.max(np.abs(res.x - start)) < ROUND_TOLERANCE
+        if settled:
             break
     field = round_.field(obj.dataset(res.x), observed)
-    return obj, res, problem.with_field(field.factor), field, rounds, runs + obj.runs
+    return obj, res, problem.with_field(field.factor), field, rounds, runs + obj.runs, settled
 
 
 def fit(problem: Calibration, *, workers=None, scheduler=None, log=None) -> FitResult:
@@ -318,10 +325,18 @@ def fit(problem: Calibration, *, workers=None, scheduler=None, log=None) -> FitR
         Called with a one-line progress message after each batch of runs.
     """
     if problem.spec.fit.rate_field == "estimate":
-        obj, res, current, field, rounds, runs = _field_rounds(problem, workers, scheduler, log)
+        rounds_out = _field_rounds(problem, workers, scheduler, log)
+        obj, res, current, field, rounds, runs, settled = rounds_out
     else:
         obj, field, rounds, current = Objective(problem, workers, scheduler, log), None, 0, problem
         res = _global_fit(obj, np.clip(problem.start(), problem.lower, problem.upper))
+        settled = True
+    if res.status == 0:
+        stopped_by = f"fit.max_iterations = {problem.spec.fit.max_iterations}"
+    elif not settled:
+        stopped_by = f"{FIELD_ROUNDS} rounds of the rate field, parameters still moving"
+    else:
+        stopped_by = ""
     r, J = obj.fun(res.x), obj.jac(res.x)
     runs = obj.runs if field is None else runs
     data = r[: 2 * int(problem.use.sum()) * int(problem.fitted.sum())]  # not the penalty
@@ -350,7 +365,8 @@ def fit(problem: Calibration, *, workers=None, scheduler=None, log=None) -> FitR
         evaluations=int(res.nfev),
         runs=runs + 2,
         message=str(res.message),
-        converged=res.status != 0,
+        converged=not stopped_by,
+        stopped_by=stopped_by,
         field=field,
         rounds=rounds,
     )

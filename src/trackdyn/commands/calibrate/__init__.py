@@ -69,7 +69,7 @@ def calibrate(calibration, out, overwrite: bool, workers, scheduler, console) ->
         )
     console.print(
         f"RMS misfit of the D1-band change: {result.rms_start:.3f} mm at the start, "
-        f"{result.rms_fit:.3f} mm fitted: {status(problem, result)} ({result.message})"
+        f"{result.rms_fit:.3f} mm fitted: {status(result)} ({result.message})"
     )
     refined = zip(spec.survey[1:], result.comparison.alignments[1:], strict=True)
     shifts = ", ".join(f"{s.geometry.name} {a.shift:+.3f} m" for s, a in refined)

@@ -29,12 +29,11 @@ def files_of(result: FitResult) -> tuple[str, ...]:
     return FILES + (FIELD_FILES if result.field is not None else ())
 
 
-def status(problem: Calibration, result: FitResult) -> str:
+def status(result: FitResult) -> str:
     """``fitted``, or ``not converged`` with why."""
     if result.converged:
         return "fitted"
-    return (f"not converged (stopped by fit.max_iterations = "
-            f"{problem.spec.fit.max_iterations})")  # fmt: skip
+    return f"not converged (stopped by {result.stopped_by})"
 
 
 def fit_table(problem: Calibration, result: FitResult) -> pd.DataFrame:
@@ -58,7 +57,7 @@ def fit_table(problem: Calibration, result: FitResult) -> pd.DataFrame:
     return pd.DataFrame([
         {"parameter": name, "value": v / f, "unit": unit, "standard_error": se / f,
          "start": v0 / f, "lower": lo / f, "upper": hi / f,
-         "status": status(problem, result).split(" (")[0]}
+         "status": status(result).split(" (")[0]}
         for name, (unit, f), v, se, v0, lo, hi in rows
     ])  # fmt: skip
 
@@ -190,7 +189,7 @@ def parameter_file(problem: Calibration, result: FitResult, where: str) -> str:
             '# rate_field.csv; use both: [settlement] rate_field = "rate_field.csv".\n'
         )
     header = (
-        f"# Settlement law parameters {status(problem, result)} by "
+        f"# Settlement law parameters {status(result)} by "
         f"`trackdyn calibrate {Path(where).name}`.\n"
         f"# Surveys: {surveys}; supports {Path(problem.spec.track.supports).name}.\n"
         f"# Compared: {lo:.1f}-{hi:.1f} m ({hi - lo:.1f} m) of the first survey's distances.\n"
@@ -204,7 +203,7 @@ def parameter_file(problem: Calibration, result: FitResult, where: str) -> str:
             factor = UNITS[entry["unit"]][1]
             entry["value"] = value / factor
             entry["source"] = (
-                f"{status(problem, result)} by trackdyn calibrate ({Path(where).name}) to "
+                f"{status(result)} by trackdyn calibrate ({Path(where).name}) to "
                 f"the D1-band change of the surveys {surveys}; standard error "
                 f"{se / factor:.3g} {entry['unit']}"
             )
