@@ -65,12 +65,11 @@ def fitted(tmp_path_factory):
     )
     out = path / "out"
     # the rounds of the field may end at their limit with the parameters still moving
-    # (measured: the load exponent by 2-4 % a round after 6 rounds): marked, allowed here
+    # (marked not converged, exit 1): allowed here, the test judges the result
     result = CliRunner().invoke(app, ["calibrate", str(path / "calibration.toml"), "--out",
                                       str(out), "--workers", "1",
                                       "--allow-not-converged"])  # fmt: skip
     assert result.exit_code == 0, result.output
-    print(result.stdout)
     return out, trk.supports.position, true_field
 
 

@@ -6,13 +6,11 @@ D1-band change the model predicts for survey ``k`` is linearised in ``u``: a rai
 whose ballast settled ``b_k`` by then settles ``b_k (u - u0)`` more, and the rail, resting
 on it, follows, interpolated linearly between sleepers as the loop's unloaded profile is,
 and bridging short waves as a rail on springs does (`rail_transfer`, every sleeper
-bearing; a sleeper that hangs is left to the next run). The loads follow the new dips
-and a sleeper that settles more sheds load to its neighbours, so the prediction moves
-otherwise than that; a gain ``g`` measured between the runs on two fields
-(`feedback_gain`) scales it. With ``M`` the D1 band-pass of that
-interpolation at the residual points, per rail::
+bearing; a sleeper that hangs, and the loads that follow the new dips, are left to the
+next run). With ``M`` the D1 band-pass of that interpolation at the residual points, per
+rail::
 
-    y_k = measured_k - predicted_k(u0) + g M (b_k u0) = g M diag(b_k) u + e,   e ~ N(0, σ² I)
+    y_k = measured_k - predicted_k(u0) + M (b_k u0) = M diag(b_k) u + e,   e ~ N(0, σ² I)
 
 The prior: ``u ~ N(0, τ² C)``, ``C`` the correlation of the deterioration model's own
 field (Gaussian, ``exp(-(d/ℓ)²)`` with ``ℓ`` the scenario's ``rate_correlation_length_m``,
@@ -57,9 +55,6 @@ matrix is numerically singular)."""
 MAX_PRIOR_SD = float(np.sqrt(np.log1p(MAX_RATE_COV**2)))
 """Largest standard deviation of ``ln factor`` the strength may reach [-]: that of the
 largest coefficient of variation the deterioration model accepts."""
-
-GAIN_RANGE = (0.5, 3.0)
-"""Bounds of `feedback_gain` [-]: beyond, the two runs are too far apart to say."""
 
 LOG_STRENGTH_RANGE = (-12.0, 8.0)
 """Search range of ``ln λ`` of the marginal likelihood, ``λ`` in [1/mm²]: from a field of
@@ -178,7 +173,7 @@ class Linearised:
     y: np.ndarray
 
 
-def linearise(problem, ds, log_factor, band, gain: float = 1.0) -> Linearised:
+def linearise(problem, ds, log_factor, band) -> Linearised:
     """`Linearised` about the run ``ds`` with the field ``log_factor``.
 
     Parameters
@@ -191,8 +186,6 @@ def linearise(problem, ds, log_factor, band, gain: float = 1.0) -> Linearised:
         (2, sleepers) ``ln factor`` of that run [-].
     band : sequence of ndarray
         `band_matrix` of the problem per rail.
-    gain : float
-        Measured over the linearised change of the prediction (`feedback_gain`) [-].
     """
     n = problem.position.size
     comparison = compare(problem, ds)
@@ -201,36 +194,13 @@ def linearise(problem, ds, log_factor, band, gain: float = 1.0) -> Linearised:
         at = int(np.argmin(np.abs(ds.mgt.values - problem.mgt[k])))
         settled = ds.settlement.values[at]  # (rail, sleeper) [m]
         for r in range(len(RAILS)):
-            rows = gain * band[r][problem.use] * 1e3  # mm of D1 change per m of settlement
+            rows = band[r][problem.use] * 1e3  # mm of D1 change per m of settlement
             a = np.zeros((rows.shape[0], 2 * n))
             a[:, r * n : (r + 1) * n] = rows * settled[r]
             miss = (comparison.measured[k, r] - comparison.predicted[k, r])[problem.use] * 1e3
             blocks.append(a)
             y.append(miss + a[:, r * n : (r + 1) * n] @ log_factor[r])
     return Linearised(np.vstack(blocks), np.concatenate(y))
-
-
-def feedback_gain(problem, before, after, change, band) -> float:
-    """How the prediction changed between two runs over what the linearisation says [-],
-    least squares over the residual points (`GAIN_RANGE` bounds it).
-
-    Parameters
-    ----------
-    problem : Calibration
-        The calibration.
-    before, after : xarray.Dataset
-        Runs with the same law, on the field ``u0`` and on ``u0 + change``.
-    change : ndarray
-        (2, sleepers) change of ``ln factor`` [-].
-    band : sequence of ndarray
-        `band_matrix` of the problem per rail.
-    """
-    lin = linearise(problem, before, np.zeros_like(change), band)
-    linear = lin.a @ change.ravel()
-    runs = (compare(problem, ds).predicted for ds in (before, after))
-    moved = np.subtract(*reversed(list(runs)))[problem.fitted][:, :, problem.use].ravel() * 1e3
-    gain = float(moved @ linear / max(linear @ linear, np.finfo(float).tiny))
-    return float(np.clip(gain, *GAIN_RANGE))
 
 
 class Prior:

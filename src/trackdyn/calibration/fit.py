@@ -9,8 +9,10 @@ evaluation's residual is a vector whose norm is a monotone function of the surve
 marginal likelihood with the field integrated out and its strength and the noise at their
 best (`FieldRound`; variable projection, Golub and Pereyra 2003), so that the parameters
 are not held to a field estimated for others. Its Jacobian is taken once per round (chord
-iterations). Rounds end when no fit coordinate moves by more than `ROUND_TOLERANCE`, or
-after `FIELD_ROUNDS`. The standard errors of the global parameters come from the last
+iterations). Rounds end when no fit coordinate moves by more than `ROUND_TOLERANCE`, when
+a round ends with a worse marginal likelihood than the one before (which then stands: the
+rounds are not a descent method, each is linearised about another field), or after
+`FIELD_ROUNDS`. The standard errors of the global parameters come from the last
 round's Jacobian, with the field profiled out.
 
 Every evaluation of the misfit at a point also runs its forward-difference neighbours in
@@ -40,7 +42,6 @@ from trackdyn.calibration.field import (
     band_matrix,
     estimate,
     evidence,
-    feedback_gain,
     linearise,
     rail_transfer,
 )
@@ -58,7 +59,7 @@ FAILED_RUN_MM = 100.0
 """Residual given to every comparison point of a trial whose run failed (settlement that
 ran away past the plausible profile, too many steps) [mm]: the optimiser steps back."""
 
-FIELD_ROUNDS = 10
+FIELD_ROUNDS = 6
 """Most rounds of field estimate and global fit, the first on uniform ballast included [-];
 a fit whose last round still moved a parameter by more than `ROUND_TOLERANCE` is not
 converged."""
@@ -245,20 +246,19 @@ class FieldRound:
     """The residual of a run with the field and its strength profiled out.
 
     The run's change is linearised in ``ln factor`` about the field ``log_factor`` it ran
-    on, with the measured ``gain`` (`trackdyn.calibration.field.linearise`); the residual
+    on (`trackdyn.calibration.field.linearise`); the residual
     is the vector whose squared norm is a monotone function of the marginal likelihood of
     the surveys with the field integrated out and ``λ``, ``σ²`` at their best
     (`trackdyn.calibration.field.Evidence`): minimising it is type-II maximum likelihood of
     the global parameters.
     """
 
-    def __init__(self, problem, log_factor, band, prior, gain: float = 1.0):
-        self.problem, self.log_factor, self.band = problem, log_factor, band
-        self.prior, self.gain = prior, gain
+    def __init__(self, problem, log_factor, band, prior):
+        self.problem, self.log_factor, self.band, self.prior = problem, log_factor, band, prior
 
     def linearised(self, ds):
         """`Linearised` of the run ``ds``."""
-        return linearise(self.problem, ds, self.log_factor, self.band, self.gain)
+        return linearise(self.problem, ds, self.log_factor, self.band)
 
     def __call__(self, ds) -> np.ndarray:
         return evidence(self.linearised(ds), self.prior).residual()
@@ -274,7 +274,9 @@ def _field_rounds(problem, workers, scheduler, log):
     """The global fit on uniform ballast, then rounds of global fit with the field profiled
     out, each linearised about the field estimated at the end of the one before (module
     docstring); returns the last round's objective and optimiser result, the problem on
-    the final field, the field, the rounds and the model runs of all rounds."""
+    the final field, the field, the rounds, the model runs of all rounds, and whether the
+    rounds ended by themselves: no parameter moved by more than `ROUND_TOLERANCE`, or the
+    evidence got worse (the round before then stands)."""
     band = [band_matrix(problem.x, problem.position,
                         rail_transfer(problem.position, k, problem.EI))
             for k in problem.stiffness]  # fmt: skip
@@ -286,27 +288,31 @@ def _field_rounds(problem, workers, scheduler, log):
     if log:
         log("round 1: the global fit on uniform ballast:")
     res = _global_fit(obj, np.clip(problem.start(), problem.lower, problem.upper))
-    runs, rounds, settled = 0, 1, False
+    spent, rounds, settled, best = [obj], 1, False, np.inf
     for rounds in range(2, FIELD_ROUNDS + 1):
         before = obj.dataset(res.x)
-        runs += obj.runs
+        kept = (obj, res, round_)
         field = round_.field(before, observed)
         current = problem.with_field(field.factor)
         obj = Objective(current, workers, scheduler, log, chord=True)
-        change = field.log_factor - round_.log_factor
-        gain = feedback_gain(problem, before, obj.dataset(res.x), change, band)
-        round_ = FieldRound(current, field.log_factor, band, prior, gain)
+        spent.append(obj)
+        round_ = FieldRound(current, field.log_factor, band, prior)
         obj.residual = round_
         if log:
             log(f"round {rounds}: the global fit with the field profiled out, on the field "
-                f"estimated (cov {field.cov:.2f}, noise {field.noise_mm:.3f} mm, gain "
-                f"{gain:.2f}):")  # fmt: skip
+                f"estimated (cov {field.cov:.2f}, noise {field.noise_mm:.3f} mm):")  # fmt: skip
         start, res = res.x, _global_fit(obj, res.x, "linear")
+        if 2 * res.cost > best:  # the evidence got worse: the round before stands
+            obj, res, round_ = kept
+            rounds, settled = rounds - 1, True
+            break
+        best = 2 * res.cost
         settled = np.max(np.abs(res.x - start)) < ROUND_TOLERANCE
         if settled:
             break
     field = round_.field(obj.dataset(res.x), observed)
-    return obj, res, problem.with_field(field.factor), field, rounds, runs + obj.runs, settled
+    runs = sum(o.runs for o in spent)
+    return obj, res, problem.with_field(field.factor), field, rounds, runs, settled
 
 
 def fit(problem: Calibration, *, workers=None, scheduler=None, log=None) -> FitResult:
