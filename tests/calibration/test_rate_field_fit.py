@@ -78,7 +78,7 @@ def test_check_survey_is_predicted_with_the_field(fitted):
     table = pd.read_csv(out / "calibration.csv")
     check = table[table.role == "check"]
     error = np.sqrt(np.mean((check.d1_sd_predicted_mm - check.d1_sd_mm) ** 2))
-    assert error < 0.05, error  # issue 21's acceptance; 0.036 mm measured
+    assert error < 0.05, error  # issue 21's acceptance; 0.029 mm measured
 
 
 def test_estimated_field_follows_the_true_one(fitted):
@@ -89,14 +89,14 @@ def test_estimated_field_follows_the_true_one(fitted):
     smooth = [uniform_filter1d(np.log(f), window, axis=1) for f in (true_field, estimate)]
     inner = (position > position[0] + 15) & (position < position[-1] - 15)  # compared
     r = np.corrcoef(smooth[0][:, inner].ravel(), smooth[1][:, inner].ravel())[0, 1]
-    assert r >= 0.7, r  # issue 21's acceptance; 0.75 measured
+    assert r >= 0.7, r  # issue 21's acceptance; 0.76 measured
     se = field.standard_error.to_numpy()
     assert np.all(se > 0) and np.median(se) < 0.2
 
 
 def test_global_parameters_are_closer_than_on_uniform_ballast(fitted):
     """Issue 21 asks for 10 %; on this short section (5 MGT fitted) the fit ends at
-    K_s +19 % and exponent -12 % (measured): at least halves the uniform fit's error."""
+    K_s +21 % and exponent -13 % (measured): at least halves the uniform fit's error."""
     out, _, _ = fitted
     fit = pd.read_csv(out / "fit.csv").set_index("parameter")
     for name, truth in TRUE.items():

@@ -10,9 +10,10 @@ marginal likelihood with the field integrated out and its strength and the noise
 best (`FieldRound`; variable projection, Golub and Pereyra 2003), so that the parameters
 are not held to a field estimated for others. Its Jacobian is taken once per round (chord
 iterations). Rounds end when no fit coordinate moves by more than `ROUND_TOLERANCE`, when
-a round ends with a worse marginal likelihood than the one before (which then stands: the
-rounds are not a descent method, each is linearised about another field), or after
-`FIELD_ROUNDS`. The standard errors of the global parameters come from the last
+a round ends with a marginal likelihood worse than the one before's by more than
+`EVIDENCE_TOLERANCE` (which then stands: the rounds are not a descent method, each is
+linearised about another field, and on surveys of a strong field they drift on past the
+best), or after `FIELD_ROUNDS`. The standard errors of the global parameters come from the last
 round's Jacobian, with the field profiled out.
 
 Every evaluation of the misfit at a point also runs its forward-difference neighbours in
@@ -67,6 +68,10 @@ converged."""
 ROUND_TOLERANCE = 0.01
 """A round whose global fit moves no fit coordinate by more than this is the last [-]
 (1 % of a parameter fitted in log space)."""
+
+EVIDENCE_TOLERANCE = 0.02
+"""A round whose squared residual (the evidence, `FieldRound`) ends more than this
+fraction above the round before's gives way to it [-]."""
 
 MAD_SCALE = 1.4826
 """Median absolute deviation to standard deviation of a normal distribution [-]."""
@@ -302,7 +307,7 @@ def _field_rounds(problem, workers, scheduler, log):
             log(f"round {rounds}: the global fit with the field profiled out, on the field "
                 f"estimated (cov {field.cov:.2f}, noise {field.noise_mm:.3f} mm):")  # fmt: skip
         start, res = res.x, _global_fit(obj, res.x, "linear")
-        if 2 * res.cost > best:  # the evidence got worse: the round before stands
+        if 2 * res.cost > (1 + EVIDENCE_TOLERANCE) * best:  # worse: the round before stands
             obj, res, round_ = kept
             rounds, settled = rounds - 1, True
             break
