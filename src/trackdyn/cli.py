@@ -216,15 +216,29 @@ def calibrate(
     scheduler: Annotated[
         str | None, typer.Option(help="Address of a running Dask scheduler, tcp://HOST:PORT.")
     ] = None,
+    allow_not_converged: Annotated[
+        bool, typer.Option(help="Exit 0 when the fit stops at fit.max_iterations.")
+    ] = False,
 ):
-    """Fit settlement-law parameters to two or more geometry surveys of one section.
+    """Fit settlement-law parameters and each rail seat's settlement-rate factor to two or
+    more geometry surveys of one section.
 
-    Writes settlement_fitted.toml (for deteriorate's [settlement] file), calibration.csv
-    (misfit and D1 SD per survey, rail and segment) and calibration.png.
+    Writes settlement_fitted.toml (for deteriorate's [settlement] file), rate_field.csv
+    (for its [settlement] rate_field), fit.csv (fitted values and standard errors),
+    calibration.csv (misfit and D1 SD per survey, rail and segment), calibration.png and
+    rate_field.png. A fit that did not converge (fit.max_iterations, or the rate field's
+    rounds) exits 1 (files written, marked not converged) unless --allow-not-converged.
     """
     from trackdyn.commands.calibrate import calibrate as job
 
-    job(calibration, out, overwrite, workers, scheduler, console)
+    converged = job(calibration, out, overwrite, workers, scheduler, console)
+    if not converged and not allow_not_converged:
+        print(
+            "error: the fit did not converge (files written, marked not converged, the reason "
+            "above); raise fit.max_iterations, or pass --allow-not-converged",
+            file=sys.stderr,
+        )
+        raise typer.Exit(1)
 
 
 @app.command()

@@ -27,6 +27,21 @@ GEOMETRY_KM_HOLDING_M = "distance_km,left_mm,right_mm\n" + "".join(
     f"{0.25 * i:g},0,0\n" for i in range(1201)
 )  # 300 m of samples 0.25 m apart, the column saying km
 
+RATE_FIELD = '[settlement]\nrate_field = "f.csv"\n[loop]\ntotal_mgt = 0.1\n'
+
+
+def rate_rows(factor, upto_m: float) -> str:
+    """A rate-field file, both rails every 0.6 m from 0 to ``upto_m``."""
+    rows = (f"{0.6 * i:.1f},{rail},{factor},0.1\n" for i in range(int(upto_m / 0.6) + 1)
+            for rail in ("left", "right"))  # fmt: skip
+    return "distance_m,rail,factor,standard_error\n" + "".join(rows)
+
+
+CALIBRATION = (
+    '[track]\nsupports = "s.csv"\n[[survey]]\ngeometry = "a.csv"\nmgt = 0\n'
+    '[[survey]]\ngeometry = "b.csv"\nmgt = 1\n[fit]\nparameters = ["K_s"]\n'
+)
+
 CASES = [
     # (command line, files {name: text}, message fragment)
     (
@@ -223,6 +238,26 @@ CASES = [
         ["track", "--wheel-load-kN", "0.001"],
         {},
         "--wheel-load-kN is 0.001 kN, outside the plausible 1 to 500 kN",
+    ),
+    (
+        ["deteriorate", "bad.toml"],
+        {"bad.toml": RATE_FIELD, "f.csv": rate_rows(1.0, 100.0)},  # the example is 1 km
+        "the field must cover the track",
+    ),
+    (
+        ["deteriorate", "bad.toml"],
+        {"bad.toml": RATE_FIELD, "f.csv": rate_rows("none", 1100.0)},
+        "f.csv: line 2: needs distance_m a number, rail left or right and factor in (0, 100]",
+    ),
+    (
+        ["deteriorate", "bad.toml"],
+        {"bad.toml": RATE_FIELD.replace("[loop]", "seed = 3\n[loop]")},
+        "settlement: give rate_field or rate_cov and seed, not both",
+    ),
+    (
+        ["calibrate", "bad.toml"],
+        {"bad.toml": CALIBRATION + "[settlement]\nrate_cov = 0\n"},
+        "settlement.rate_cov: a calibration estimates the rate field or takes it uniform",
     ),
 ]
 

@@ -1,11 +1,30 @@
 """The least-squares fit of a calibration (`trackdyn.calibration.problem`).
 
+With ``fit.rate_field = "estimate"`` (the default) each rail seat's settlement-rate factor
+is fitted with the global parameters. Round 1 is the global fit on uniform ballast
+(soft-L1 loss). Each later round estimates the field at the current values
+(`trackdyn.calibration.field`: linearised about a run, strength by marginal likelihood),
+runs on it, and fits the global parameters again with the field profiled out: every
+evaluation's residual is a vector whose norm is a monotone function of the surveys'
+marginal likelihood with the field integrated out and its strength and the noise at their
+best (`FieldRound`; variable projection, Golub and Pereyra 2003), so that the parameters
+are not held to a field estimated for others. Its Jacobian is taken once per round (chord
+iterations). Rounds end when no fit coordinate moves by more than `ROUND_TOLERANCE`, when
+a round ends with a marginal likelihood worse than the one before's by more than
+`EVIDENCE_TOLERANCE` (which then stands: the rounds are not a descent method, each is
+linearised about another field, and on surveys of a strong field they drift on past the
+best), or after `FIELD_ROUNDS`. The standard errors of the global parameters come from the last
+round's Jacobian, with the field profiled out.
+
 Every evaluation of the misfit at a point also runs its forward-difference neighbours in
 the same batch of Dask tasks, so a Jacobian's ``n + 1`` model runs go to ``n + 1``
 workers at once and the Jacobian at an accepted point costs no further runs.
 
 References
 ----------
+Golub, G., Pereyra, V. (2003). Separable nonlinear least squares: the variable projection
+method and its applications. Inverse Problems 19(2), R1-R26.
+
 Branch, M.A., Coleman, T.F., Li, Y. (1999). A subspace, interior, and conjugate gradient
 method for large-scale bound-constrained minimization problems. SIAM Journal on Scientific
 Computing 21(1), 1-23.
@@ -18,6 +37,15 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
+from trackdyn.calibration.field import (
+    FieldEstimate,
+    Prior,
+    band_matrix,
+    estimate,
+    evidence,
+    linearise,
+    rail_transfer,
+)
 from trackdyn.calibration.problem import (
     FD_STEP,
     Calibration,
@@ -31,6 +59,19 @@ from trackdyn.errors import TrackdynInputError
 FAILED_RUN_MM = 100.0
 """Residual given to every comparison point of a trial whose run failed (settlement that
 ran away past the plausible profile, too many steps) [mm]: the optimiser steps back."""
+
+FIELD_ROUNDS = 6
+"""Most rounds of field estimate and global fit, the first on uniform ballast included [-];
+a fit whose last round still moved a parameter by more than `ROUND_TOLERANCE` is not
+converged."""
+
+ROUND_TOLERANCE = 0.01
+"""A round whose global fit moves no fit coordinate by more than this is the last [-]
+(1 % of a parameter fitted in log space)."""
+
+EVIDENCE_TOLERANCE = 0.02
+"""A round whose squared residual (the evidence, `FieldRound`) ends more than this
+fraction above the round before's gives way to it [-]."""
 
 MAD_SCALE = 1.4826
 """Median absolute deviation to standard deviation of a normal distribution [-]."""
@@ -49,21 +90,33 @@ class Objective:
         Address of a running Dask scheduler.
     log : callable, optional
         Called with a one-line message after each batch.
+    residual : callable, optional
+        Residuals [mm] of a run (a Dataset); default `residuals` of its `compare`.
+    chord : bool
+        Keep the first Jacobian (chord iterations): later evaluations run their point only.
     """
 
-    def __init__(self, problem: Calibration, workers=None, scheduler=None, log=None):
+    def __init__(self, problem: Calibration, workers=None, scheduler=None, log=None,
+                 residual=None, chord: bool = False):  # fmt: skip
         self.problem, self.workers, self.scheduler, self.log = problem, workers, scheduler, log
+        self.residual = residual or (lambda ds: residuals(problem, compare(problem, ds)))
+        self.chord, self.fixed = chord, None
         self.cache: dict[tuple, np.ndarray] = {}
+        self.datasets: dict[tuple, object] = {}  # runs of the points evaluated, not neighbours
         self.runs = 0
 
     def _steps(self, theta) -> np.ndarray:
         """Forward step per coordinate, backward where it would leave the bounds."""
         return np.where(theta + FD_STEP <= self.problem.upper, FD_STEP, -FD_STEP)
 
-    def _batch(self, theta) -> None:
-        """Run the point and its neighbours that are not cached yet."""
+    def _batch(self, theta, neighbours: bool = True) -> None:
+        """Run the point (and its neighbours) where not cached yet."""
         h = self._steps(theta)
         points = [theta] + [theta + h[i] * np.eye(theta.size)[i] for i in range(theta.size)]
+        points = points if neighbours else points[:1]
+        for p in points:
+            if _key(p) not in self.cache and _key(p) in self.datasets:  # run, not compared
+                self.cache[_key(p)] = self.residual(self.datasets[_key(p)])
         todo = [p for p in points if _key(p) not in self.cache]
         if not todo:
             return
@@ -77,7 +130,9 @@ class Objective:
             if isinstance(ds, str):
                 failed.append((p, ds))
             else:
-                self.cache[_key(p)] = residuals(self.problem, compare(self.problem, ds))
+                self.cache[_key(p)] = self.residual(ds)
+                if p is theta:
+                    self.datasets[_key(p)] = ds
         for p, ds in failed:  # trials the optimiser must step back from
             size = next(iter(self.cache.values())).size
             self.cache[_key(p)] = np.full(size, FAILED_RUN_MM)
@@ -86,21 +141,31 @@ class Objective:
         self.runs += len(todo)
         if self.log:
             rms = np.sqrt(np.mean(self.cache[_key(theta)] ** 2))
-            values = ", ".join(
-                f"{n} = {v:.4g}" for n, v in zip(self.problem.names, _values(self.problem, theta),
-                                                  strict=True)
+            values = self.problem.shown(_values(self.problem, theta))
+            self.log(f"{self.runs} runs: {values}: RMS residual {rms:.3f} mm")
+
+    def dataset(self, theta):
+        """The run at ``theta`` (run again when only its residuals were kept)."""
+        key = _key(theta)
+        if key not in self.datasets:
+            (self.datasets[key],) = run_laws(
+                self.problem, [self.problem.law_at(theta)], self.problem.fit_options,
+                workers=self.workers, scheduler=self.scheduler,
             )  # fmt: skip
-            self.log(f"{self.runs} runs: {values} (SI): RMS misfit {rms:.3f} mm")
+            self.runs += 1
+        return self.datasets[key]
 
     def fun(self, theta) -> np.ndarray:
         """Residuals at fit coordinates ``theta`` [mm]."""
         theta = np.asarray(theta, dtype=float)
-        self._batch(theta)
+        self._batch(theta, neighbours=not self.chord)
         return self.cache[_key(theta)]
 
     def jac(self, theta) -> np.ndarray:
         """Forward-difference Jacobian of the residuals at ``theta`` [mm per coordinate]."""
         theta = np.asarray(theta, dtype=float)
+        if self.fixed is not None:
+            return self.fixed
         self._batch(theta)
         h = self._steps(theta)
         r0 = self.cache[_key(theta)]
@@ -108,7 +173,10 @@ class Objective:
             (self.cache[_key(theta + h[i] * np.eye(theta.size)[i])] - r0) / h[i]
             for i in range(theta.size)
         ]
-        return np.column_stack(columns)
+        jacobian = np.column_stack(columns)
+        if self.chord:
+            self.fixed = jacobian
+        return jacobian
 
 
 def _key(theta) -> tuple:
@@ -137,9 +205,18 @@ class FitResult:
         Measured and predicted changes of every survey (checks included) with the fitted
         and with the starting values.
     evaluations, runs : int
-        Misfit evaluations of the optimiser and model runs in all.
+        Misfit evaluations of the optimiser (its last global fit) and model runs in all.
     message : str
         The optimiser's reason to stop.
+    converged : bool
+        False when the last global fit stopped at ``fit.max_iterations``, or the rounds of
+        the rate field at `FIELD_ROUNDS` with the parameters still moving.
+    stopped_by : str
+        What stopped a fit that did not converge (empty when it did).
+    field : FieldEstimate or None
+        The estimated settlement-rate field; None for ``fit.rate_field = "uniform"``.
+    rounds : int
+        Rounds of field estimate and global fit [-].
     """
 
     values: np.ndarray
@@ -154,10 +231,98 @@ class FitResult:
     evaluations: int
     runs: int
     message: str
+    converged: bool
+    stopped_by: str
+    field: FieldEstimate | None
+    rounds: int
+
+
+def _global_fit(obj: Objective, x0, loss: str = "soft_l1"):
+    """`scipy.optimize.least_squares` of the global parameters from ``x0``."""
+    problem = obj.problem
+    f = problem.spec.fit
+    return least_squares(
+        obj.fun, x0, jac=obj.jac, bounds=(problem.lower, problem.upper), method="trf",
+        loss=loss, f_scale=f.loss_scale_mm, xtol=1e-3, ftol=1e-4, max_nfev=f.max_iterations,
+    )  # fmt: skip
+
+
+class FieldRound:
+    """The residual of a run with the field and its strength profiled out.
+
+    The run's change is linearised in ``ln factor`` about the field ``log_factor`` it ran
+    on (`trackdyn.calibration.field.linearise`); the residual
+    is the vector whose squared norm is a monotone function of the marginal likelihood of
+    the surveys with the field integrated out and ``λ``, ``σ²`` at their best
+    (`trackdyn.calibration.field.Evidence`): minimising it is type-II maximum likelihood of
+    the global parameters.
+    """
+
+    def __init__(self, problem, log_factor, band, prior):
+        self.problem, self.log_factor, self.band, self.prior = problem, log_factor, band, prior
+
+    def linearised(self, ds):
+        """`Linearised` of the run ``ds``."""
+        return linearise(self.problem, ds, self.log_factor, self.band)
+
+    def __call__(self, ds) -> np.ndarray:
+        return evidence(self.linearised(ds), self.prior).residual()
+
+    def field(self, ds, observed) -> FieldEstimate:
+        """The field of the run ``ds``: posterior mean at the best strength."""
+        lin = self.linearised(ds)
+        ev = evidence(lin, self.prior)
+        return estimate(lin, self.prior, self.problem.position, observed, ev.lam, ev.sigma2)
+
+
+def _field_rounds(problem, workers, scheduler, log):
+    """The global fit on uniform ballast, then rounds of global fit with the field profiled
+    out, each linearised about the field estimated at the end of the one before (module
+    docstring); returns the last round's objective and optimiser result, the problem on
+    the final field, the field, the rounds, the model runs of all rounds, and whether the
+    rounds ended by themselves: no parameter moved by more than `ROUND_TOLERANCE`, or the
+    evidence got worse (the round before then stands)."""
+    band = [band_matrix(problem.x, problem.position,
+                        rail_transfer(problem.position, k, problem.EI))
+            for k in problem.stiffness]  # fmt: skip
+    prior = Prior(problem.position, problem.spec.settlement.rate_correlation_length_m)
+    x = problem.x[problem.valid]
+    observed = (problem.position >= x[0]) & (problem.position <= x[-1])
+    round_ = FieldRound(problem, np.zeros((2, problem.position.size)), band, prior)
+    obj = Objective(problem, workers, scheduler, log)
+    if log:
+        log("round 1: the global fit on uniform ballast:")
+    res = _global_fit(obj, np.clip(problem.start(), problem.lower, problem.upper))
+    spent, rounds, settled, best = [obj], 1, False, np.inf
+    for rounds in range(2, FIELD_ROUNDS + 1):
+        before = obj.dataset(res.x)
+        kept = (obj, res, round_)
+        field = round_.field(before, observed)
+        current = problem.with_field(field.factor)
+        obj = Objective(current, workers, scheduler, log, chord=True)
+        spent.append(obj)
+        round_ = FieldRound(current, field.log_factor, band, prior)
+        obj.residual = round_
+        if log:
+            log(f"round {rounds}: the global fit with the field profiled out, on the field "
+                f"estimated (cov {field.cov:.2f}, noise {field.noise_mm:.3f} mm):")  # fmt: skip
+        start, res = res.x, _global_fit(obj, res.x, "linear")
+        if 2 * res.cost > (1 + EVIDENCE_TOLERANCE) * best:  # worse: the round before stands
+            obj, res, round_ = kept
+            rounds, settled = rounds - 1, True
+            break
+        best = 2 * res.cost
+        settled = np.max(np.abs(res.x - start)) < ROUND_TOLERANCE
+        if settled:
+            break
+    field = round_.field(obj.dataset(res.x), observed)
+    runs = sum(o.runs for o in spent)
+    return obj, res, problem.with_field(field.factor), field, rounds, runs, settled
 
 
 def fit(problem: Calibration, *, workers=None, scheduler=None, log=None) -> FitResult:
-    """Fit the parameters: soft-L1 least squares of the D1-band change, within bounds.
+    """Fit the parameters (and the rate field): soft-L1 least squares of the D1-band
+    change, within bounds.
 
     Parameters
     ----------
@@ -170,16 +335,23 @@ def fit(problem: Calibration, *, workers=None, scheduler=None, log=None) -> FitR
     log : callable, optional
         Called with a one-line progress message after each batch of runs.
     """
-    obj = Objective(problem, workers, scheduler, log)
-    f = problem.spec.fit
-    x0 = np.clip(problem.start(), problem.lower, problem.upper)
-    res = least_squares(
-        obj.fun, x0, jac=obj.jac, bounds=(problem.lower, problem.upper), method="trf",
-        loss="soft_l1", f_scale=f.loss_scale_mm, xtol=1e-3, ftol=1e-4,
-        max_nfev=f.max_iterations,
-    )  # fmt: skip
+    if problem.spec.fit.rate_field == "estimate":
+        rounds_out = _field_rounds(problem, workers, scheduler, log)
+        obj, res, current, field, rounds, runs, settled = rounds_out
+    else:
+        obj, field, rounds, current = Objective(problem, workers, scheduler, log), None, 0, problem
+        res = _global_fit(obj, np.clip(problem.start(), problem.lower, problem.upper))
+        settled = True
+    if res.status == 0:
+        stopped_by = f"fit.max_iterations = {problem.spec.fit.max_iterations}"
+    elif not settled:
+        stopped_by = f"{FIELD_ROUNDS} rounds of the rate field, parameters still moving"
+    else:
+        stopped_by = ""
     r, J = obj.fun(res.x), obj.jac(res.x)
-    sigma = MAD_SCALE * float(np.median(np.abs(r)))
+    runs = obj.runs if field is None else runs
+    data = r[: 2 * int(problem.use.sum()) * int(problem.fitted.sum())]  # not the penalty
+    sigma = MAD_SCALE * float(np.median(np.abs(data)))
     normal = J.T @ J
     if np.linalg.matrix_rank(normal) < res.x.size:
         se_coord = np.full(res.x.size, np.inf)  # a parameter the surveys do not tell
@@ -187,9 +359,10 @@ def fit(problem: Calibration, *, workers=None, scheduler=None, log=None) -> FitR
         se_coord = sigma * np.sqrt(np.diag(np.linalg.inv(normal)))
     values = _values(problem, res.x)
     law = problem.law_at(res.x)
-    runs = run_laws(problem, [law, problem.law], problem.options, workers=workers,
-                    scheduler=scheduler)  # fmt: skip
-    fitted, start = (compare(problem, ds) for ds in runs)
+    (fitted,) = run_laws(current, [law], current.options, workers=workers, scheduler=scheduler)
+    (start,) = run_laws(problem, [problem.law], problem.options, workers=workers,
+                        scheduler=scheduler)  # fmt: skip
+    fitted, start = compare(problem, fitted), compare(problem, start)
     return FitResult(
         values=values,
         standard_errors=np.where(problem.log, values * se_coord, se_coord),
@@ -197,10 +370,14 @@ def fit(problem: Calibration, *, workers=None, scheduler=None, log=None) -> FitR
         law=law,
         start_law=problem.law,
         rms_start=float(np.sqrt(np.mean(residuals(problem, start) ** 2))),
-        rms_fit=float(np.sqrt(np.mean(r**2))),
+        rms_fit=float(np.sqrt(np.mean(residuals(problem, fitted) ** 2))),
         comparison=fitted,
         start_comparison=start,
         evaluations=int(res.nfev),
-        runs=obj.runs + len(runs),
+        runs=runs + 2,
         message=str(res.message),
+        converged=not stopped_by,
+        stopped_by=stopped_by,
+        field=field,
+        rounds=rounds,
     )

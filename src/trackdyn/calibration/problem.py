@@ -16,8 +16,10 @@ differences of `FD_STEP`; a point and its neighbours run as one batch through
 errors: ``σ² (JᵀJ)⁻¹`` at the solution, σ the robust (MAD) scale of the residuals, mapped
 to the parameters by the delta method.
 
-The settlement-rate field (``[settlement] rate_cov``) is not fitted: it is random per
-sleeper, so the surveys fix its statistics, not the values the model draws.
+The settlement-rate field: uniform ballast (factor 1 at every rail seat) unless a field
+is set (`Calibration.with_field`): `trackdyn.calibration.fit` estimates one per rail seat
+(`trackdyn.calibration.field`) unless ``fit.rate_field = "uniform"``; the deterioration
+model's random field (``rate_cov``, ``seed``) is never used.
 
 References
 ----------
@@ -42,12 +44,15 @@ from trackdyn.calibration.surveys import (
     profiles_at,
     read_survey,
 )
-from trackdyn.deterioration.law_files import law_bounds, law_units
+from trackdyn.deterioration.law_files import law_bounds, law_file_table, law_units
+from trackdyn.deterioration.loop import NO_TRAFFIC_LOAD
 from trackdyn.deterioration.runs import Section, SectionTask, run_section, run_sections
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import read_supports
 from trackdyn.track.quality import WAVEBANDS
+from trackdyn.track.rails import rail_section
 from trackdyn.track.track import Geometry, Track
+from trackdyn.units import UNITS
 
 RESIDUAL_SPACING = WAVEBANDS["D1"][0] / 2
 """Spacing of the residuals, half the shortest D1 wavelength [m]."""
@@ -99,8 +104,17 @@ class Calibration:
         Points of the residuals, ``valid`` every `RESIDUAL_SPACING` [bool].
     fitted : ndarray
         Per survey: its change is fitted (not the first, not a check) [bool].
+    units : tuple of (str, float)
+        Per fitted parameter: its unit in the parameter file and that unit in SI.
     options : LoopOptions
         Loop options to the last survey; ``fit_options`` to the last fitted one.
+    position : ndarray
+        Sleeper positions of the supports file [m].
+    stiffness : ndarray
+        (2 rails, sleepers) support stiffness per rail seat, the first survey linearised
+        about the heaviest static wheel load of the traffic (as the loop's rail beam) [N/m].
+    EI : float
+        Bending stiffness of the rail [N m^2].
     """
 
     spec: object
@@ -121,13 +135,35 @@ class Calibration:
     valid: np.ndarray
     use: np.ndarray
     fitted: np.ndarray
+    units: tuple
     options: object
     fit_options: object
+    position: np.ndarray
+    stiffness: np.ndarray
+    EI: float
+
+    def with_field(self, factor) -> Calibration:
+        """This calibration run on the settlement-rate ``factor`` (2, sleepers) [-]."""
+        given = {"rate_factor": tuple(tuple(float(f) for f in row) for row in factor)}
+        options = self.options.model_copy(update=given)
+        fit_options = self.fit_options.model_copy(update=given)
+        return dataclasses.replace(self, options=options, fit_options=fit_options)
+
+    @property
+    def fitted_extent(self) -> tuple[float, float]:
+        """First and last compared distance [m]."""
+        x = self.x[self.valid]
+        return float(x[0]), float(x[-1])
 
     def law_at(self, theta):
         """The law with the fitted parameters at fit coordinates ``theta``."""
         values = np.where(self.log, np.exp(theta), theta)
         return dataclasses.replace(self.law, **dict(zip(self.names, values, strict=True)))
+
+    def shown(self, values) -> str:
+        """Fitted parameters' ``values`` [SI units] in the parameter file's units."""
+        return ", ".join(f"{n} = {v / f:.4g}{'' if u == '-' else ' ' + u}" for n, v, (u, f)
+                         in zip(self.names, values, self.units, strict=True))  # fmt: skip
 
     def start(self) -> np.ndarray:
         """Fit coordinates of the starting values."""
@@ -142,8 +178,9 @@ def _fit_coordinates(spec, base: Path, law):
     file = None if s.file is None else base / s.file
     known = law_units(s.law)
     bounds = law_bounds(s.law, file)
+    table = law_file_table(s.law, file)
     where = s.file or "settlement.toml (shipped)"
-    log, lower, upper = [], [], []
+    log, lower, upper, units = [], [], [], []
     for name in spec.fit.parameters:
         if name not in known:
             raise TrackdynInputError(
@@ -159,10 +196,13 @@ def _fit_coordinates(spec, base: Path, law):
                 f"{where}: [{s.law}] {name} = {value:g} (SI) is outside its min and max"
             )
         positive = lo > 0
+        unit = table[name]["unit"]
+        units.append((unit, UNITS[unit][1]))
         log.append(positive)
         lower.append(np.log(lo) if positive else lo)
         upper.append(np.log(hi) if positive else hi)
-    return tuple(spec.fit.parameters), np.array(log), np.array(lower), np.array(upper)
+    names = tuple(spec.fit.parameters)
+    return names, np.array(log), np.array(lower), np.array(upper), tuple(units)
 
 
 def prepare(spec, base: Path, traffic, law, options) -> Calibration:
@@ -183,11 +223,12 @@ def prepare(spec, base: Path, traffic, law, options) -> Calibration:
     options : LoopOptions
         Loop options of the file; the tonnages and snapshots are set from the surveys.
     """
-    names, log, lower, upper = _fit_coordinates(spec, base, law)
+    names, log, lower, upper, units = _fit_coordinates(spec, base, law)
     files = [base / s.geometry for s in spec.survey]
     geometries = [read_survey(f) for f in files]
     supports_file = base / spec.track.supports
-    extent = Track(geometries[0], read_supports(supports_file)).extent
+    supports = read_supports(supports_file)
+    extent = Track(geometries[0], supports).extent
     alignments = [None] * len(files)
     for i, (g, file) in enumerate(zip(geometries, files, strict=True)):
         a = align(geometries[0], g, spec.fit.max_shift_m)
@@ -218,16 +259,23 @@ def prepare(spec, base: Path, traffic, law, options) -> Calibration:
     mgt = np.array([s.mgt - spec.survey[0].mgt for s in spec.survey])
     fitted = np.array([i > 0 and not s.check for i, s in enumerate(spec.survey)])
     options = options.model_copy(update={
+        "rate_cov": 0.0,
+        "rate_factor": None,
         "total_mgt": float(mgt[-1]),
         "snapshot_every_mgt": float(mgt[-1]),
         "snapshot_mgt": tuple(float(m) for m in mgt[1:]),
     })  # fmt: skip
     fit_options = options.model_copy(update={"total_mgt": float(mgt[fitted].max())})
     section = Section("calibration", str(files[0].resolve()), str(supports_file.resolve()))
+    EI = rail_section(options.rail).EI
+    heaviest = max((t.vehicle.static_wheel_load for t in traffic), default=NO_TRAFFIC_LOAD)
+    lin = Track(geometries[0], supports).linearise(heaviest, options.run.delta,
+                                                   extrapolate=options.run.extrapolate)  # fmt: skip
     first = profiles_at(geometries[0], 0.0, x)
     return Calibration(spec, base, section, tuple(traffic), law, names, log, lower, upper, mgt,
                    tuple(alignments), grid, x, tuple(geometries), first, valid, use, fitted,
-                   options, fit_options)  # fmt: skip
+                   units, options, fit_options, supports.position,
+                   lin.support_stiffness(EI), EI)  # fmt: skip
 
 
 def run_laws(problem: Calibration, laws, options, *, workers=None, scheduler=None,

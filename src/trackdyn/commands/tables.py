@@ -131,24 +131,23 @@ def alignment_table(spec, problem) -> Table:
     return show
 
 
-def fitted_table(law: str, problem, result, units: dict) -> Table:
-    """The fitted settlement-law parameters: start, fitted, standard error, SI unit.
+def fitted_table(law: str, fit, runs: int) -> Table:
+    """The fitted settlement-law parameters in the parameter file's units.
 
     Parameters
     ----------
     law : str
         Settlement law name.
-    problem : trackdyn.calibration.problem.Calibration
-        The fit (parameter names).
-    result : trackdyn.calibration.fit.FitResult
-        The fit's result.
-    units : dict
-        SI unit per parameter name.
+    fit : pandas.DataFrame
+        `trackdyn.commands.calibrate.outputs.fit_table` of the fit.
+    runs : int
+        Model runs of the fit.
     """
-    show = Table(title=f"Fitted {law} law ({result.runs} model runs)")
-    for col in ("parameter", "start", "fitted", "standard error", "unit (SI)"):
+    show = Table(title=f"Fitted {law} law ({runs} model runs)")
+    for col in ("parameter", "start", "fitted", "standard error", "bounds", "unit", "status"):
         show.add_column(Text(col))
-    for name, v0, v, se in zip(problem.names, result.start, result.values,
-                               result.standard_errors, strict=True):  # fmt: skip
-        show.add_row(name, f"{v0:.4g}", f"{v:.4g}", f"{se:.2g}", units[name])
+    for row in fit.itertuples(index=False):
+        show.add_row(row.parameter, f"{row.start:.4g}", f"{row.value:.4g}",
+                     f"{row.standard_error:.2g}", f"{row.lower:g}-{row.upper:g}", row.unit,
+                     row.status)  # fmt: skip
     return show

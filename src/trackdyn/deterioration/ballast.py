@@ -22,7 +22,8 @@ first step runs on the track as it starts):
 The rate field: a lognormal factor per sleeper on every settlement increment, ``exp(σ z -
 σ²/2)`` with ``σ² = ln(1 + cov²)`` and ``z`` a unit Gaussian field with correlation length
 ``ℓ`` (`trackdyn.track.synthetic.correlated_field`), the two rails' fields correlated by
-`RAIL_CORRELATION`.
+`RAIL_CORRELATION`; or a field given per rail seat (`read_rate_field`: a file of
+`trackdyn calibrate`, ``rate_field.csv``), used as it is.
 
 References
 ----------
@@ -45,13 +46,18 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+import pandas as pd
 
 from trackdyn.beam.railseat import RailBeam, RailRest, Windows, rest_state
 from trackdyn.errors import TrackdynInputError, shown
+from trackdyn.io import read_table
 from trackdyn.track.discrete import void_gap
 from trackdyn.track.synthetic import correlated_field
 from trackdyn.track.track import RAILS, Geometry, LinearisedTrack
 from trackdyn.units import GRAVITY
+
+MAX_FACTOR = 100.0
+"""Largest settlement-rate factor a rate-field file may give [-]: a typing error beyond."""
 
 MAX_RATE_COV = 3.0
 """Largest settlement-rate coefficient of variation accepted [-]: a typing error beyond
@@ -62,8 +68,19 @@ RAIL_CORRELATION = 0.7
 `trackdyn.track.synthetic.synthetic_track` uses for its stiffness fields."""
 
 
-def rate_field(n: int, spacing: float, cov: float, correlation_length: float, seed):
-    """Lognormal settlement-rate factor per rail and sleeper, mean 1, shape (2, n) [-].
+RATE_FIELD_COLUMNS = ("distance_m", "rail", "factor")
+"""Columns a rate-field file needs (`read_rate_field`); others (``standard_error``) are
+ignored."""
+
+MATCH_TOLERANCE = 0.25
+"""Largest distance between a rail seat and its row of a rate-field file, as a fraction of
+the sleeper spacing [-]."""
+
+
+def rate_field(n: int, spacing: float, cov: float, correlation_length: float, seed,
+               given=None):  # fmt: skip
+    """Settlement-rate factor per rail and sleeper, shape (2, n) [-]: ``given`` when there
+    is one, else lognormal with mean 1.
 
     Parameters
     ----------
@@ -77,7 +94,18 @@ def rate_field(n: int, spacing: float, cov: float, correlation_length: float, se
         Correlation length of the underlying Gaussian field, > 0 [m].
     seed : int or tuple of int
         Seed of the field.
+    given : array_like, optional
+        A field given per rail and sleeper, (2, n) [-] (`read_rate_field`); ``cov``,
+        ``correlation_length`` and ``seed`` are then not used.
     """
+    if given is not None:
+        factor = np.asarray(given, dtype=float)
+        if factor.shape != (len(RAILS), n) or not np.all(np.isfinite(factor) & (factor > 0)):
+            raise TrackdynInputError(
+                f"the given rate field has shape {factor.shape} (positive factors needed for "
+                f"{len(RAILS)} rails x {n} sleepers)"
+            )
+        return factor
     if not 0 <= cov <= MAX_RATE_COV:
         raise TrackdynInputError(
             f"rate_cov is {shown(cov)}, outside the plausible 0 to {MAX_RATE_COV:g} (a "
@@ -94,6 +122,57 @@ def rate_field(n: int, spacing: float, cov: float, correlation_length: float, se
          for _ in RAILS]  # fmt: skip
     sigma = np.sqrt(np.log1p(cov**2))
     return np.exp(sigma * np.array(z) - sigma**2 / 2)
+
+
+def read_rate_field(path, position) -> np.ndarray:
+    """The settlement-rate factor of each rail seat from a file, (2, n) [-].
+
+    The file (CSV, ``distance_m,rail,factor[,standard_error]``, one row per rail and
+    sleeper, as `trackdyn calibrate` writes it) must have a row for every sleeper of each
+    rail within `MATCH_TOLERANCE` of the sleeper spacing; rows beyond the track are
+    ignored.
+
+    Parameters
+    ----------
+    path : path
+        The CSV file.
+    position : ndarray
+        Sleeper positions of the track [m].
+    """
+    frame = read_table(path, RATE_FIELD_COLUMNS)
+    distance = pd.to_numeric(frame.distance_m, errors="coerce").to_numpy()
+    factor = pd.to_numeric(frame.factor, errors="coerce").to_numpy()
+    rail = frame.rail.str.strip().to_numpy()
+    bad = ~(np.isfinite(distance) & np.isfinite(factor) & (factor > 0) & (factor <= MAX_FACTOR))
+    bad |= ~np.isin(rail, RAILS)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise TrackdynInputError(
+            f"{path}: line {i + 2}: needs distance_m a number, rail left or right and factor "
+            f"in (0, {MAX_FACTOR:g}]; got {frame.distance_m[i]!r}, {frame.rail[i]!r}, "
+            f"{frame.factor[i]!r}"
+        )
+    position = np.asarray(position, dtype=float)
+    tolerance = MATCH_TOLERANCE * float(np.median(np.diff(position)))
+    out = np.empty((len(RAILS), position.size))
+    for r, name in enumerate(RAILS):
+        x, f = distance[rail == name], factor[rail == name]
+        order = np.argsort(x)
+        x, f = x[order], f[order]
+        if x.size == 0:
+            raise TrackdynInputError(f"{path}: no rows for the {name} rail")
+        j = np.clip(np.searchsorted(x, position), 1, max(x.size - 1, 1))
+        j = np.where(np.abs(x[j - 1] - position) <= np.abs(x[j] - position), j - 1, j)
+        far = np.abs(x[j] - position) > tolerance
+        if far.any():
+            k = int(np.flatnonzero(far)[0])
+            raise TrackdynInputError(
+                f"{path}: no {name}-rail row within {tolerance:.3g} m of the sleeper at "
+                f"{position[k]:g} m; the field must cover the track ({position[0]:g}-"
+                f"{position[-1]:g} m)"
+            )
+        out[r] = f[j]
+    return out
 
 
 @dataclasses.dataclass(frozen=True)

@@ -134,6 +134,9 @@ class LoopOptions(Strict):
         (an engineering estimate: a few sleepers).
     seed : int or tuple of int
         Seed of the rate field.
+    rate_factor : tuple of tuple of float, optional
+        A rate field given per rail and sleeper (2, n) [-], e.g. estimated by `trackdyn
+        calibrate`; ``rate_cov`` and ``seed`` are then not used.
     sleeper_mass : float
         Sleeper mass per rail seat, hanging from the rail when its ballast sinks [kg];
         default 125.5 kg, the half-sleeper mass of Zhai et al. (2004).
@@ -172,6 +175,7 @@ class LoopOptions(Strict):
     rate_cov: float = 0.3
     rate_correlation_length: float = 3.0
     seed: int | tuple[int, ...] = 0
+    rate_factor: tuple[tuple[float, ...], ...] | None = None
     sleeper_mass: float = 125.5
     run: RunOptions = RunOptions()
     rail: str = "60E1"
@@ -304,7 +308,8 @@ def predict(track: Track, traffic, law, options=None, *, zones=(), progress=Fals
     shape = (len(RAILS), pos.size)
     check_zones(zones, (float(pos[0]), float(pos[-1])))
     spacing = float(np.median(np.diff(pos)))
-    rate = rate_field(pos.size, spacing, o.rate_cov, o.rate_correlation_length, o.seed)
+    rate = rate_field(pos.size, spacing, o.rate_cov, o.rate_correlation_length, o.seed,
+                      o.rate_factor)  # fmt: skip
     for z in zones:
         if z.rate is not None:
             own = rate_field(pos.size, spacing, z.rate.cov, z.rate.correlation_length,

@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from trackdyn.commands.tables import alignment_table, fitted_table, frame_table
 from trackdyn.errors import require_workers
 from trackdyn.staging import output_folder
 
 
-def calibrate(calibration, out, overwrite: bool, workers, scheduler, console) -> None:
-    """Fit the law; write settlement_fitted.toml, calibration.csv and calibration.png.
+def calibrate(calibration, out, overwrite: bool, workers, scheduler, console) -> bool:
+    """Fit the law (and the rate field); write the files of
+    `trackdyn.commands.calibrate.outputs.files_of`.
 
     Parameters
     ----------
@@ -24,25 +27,49 @@ def calibrate(calibration, out, overwrite: bool, workers, scheduler, console) ->
         Address of a running Dask scheduler.
     console : rich.console.Console
         Where the alignments, the fit's progress and its result are shown.
+
+    Returns
+    -------
+    bool
+        The fit converged (False: stopped by ``fit.max_iterations``; the files say so).
     """
     from trackdyn.calibration.fit import fit
-    from trackdyn.commands.calibrate.outputs import sd_errors, write_calibration
+    from trackdyn.commands.calibrate.outputs import (
+        files_of,
+        fit_table,
+        sd_errors,
+        status,
+        write_calibration,
+    )
     from trackdyn.commands.calibrate.spec import calibration_problem, load_calibration
-    from trackdyn.deterioration.law_files import law_units
     from trackdyn.parallel import shared_cluster
 
     require_workers(workers)
     spec, base = load_calibration(calibration)
     problem = calibration_problem(spec, base)
     console.print(alignment_table(spec, problem))
+    lo, hi = problem.fitted_extent
+    console.print(
+        f"compared: {lo:.1f}-{hi:.1f} m ({hi - lo:.1f} m) of the first survey's distances "
+        "(the stretch every aligned survey and the supports cover, less the band-pass ends)"
+    )
+    field = "estimated per rail seat" if spec.fit.rate_field == "estimate" else "uniform"
+    console.print(f"settlement-rate field: {field} (fit.rate_field)")
     with output_folder(out, "calibrate", overwrite) as stage, shared_cluster(workers, scheduler):
         result = fit(problem, workers=workers, scheduler=scheduler, log=console.print)
         table = write_calibration(problem, result, stage, str(calibration))
-    units = law_units(spec.settlement.law)
-    console.print(fitted_table(spec.settlement.law, problem, result, units))
+    console.print(fitted_table(spec.settlement.law, fit_table(problem, result), result.runs))
+    if result.field is not None:
+        f = result.field
+        console.print(
+            f"rate field: {result.rounds} round(s); prior cov {f.cov:.2f} chosen by marginal "
+            f"likelihood, noise {f.noise_mm:.3f} mm; factor {f.factor.min():.2f}-"
+            f"{f.factor.max():.2f}, median standard error "
+            f"{float(np.median(f.standard_error[:, f.observed])):.2f} where compared"
+        )
     console.print(
         f"RMS misfit of the D1-band change: {result.rms_start:.3f} mm at the start, "
-        f"{result.rms_fit:.3f} mm fitted ({result.message})"
+        f"{result.rms_fit:.3f} mm fitted: {status(result)} ({result.message})"
     )
     refined = zip(spec.survey[1:], result.comparison.alignments[1:], strict=True)
     shifts = ", ".join(f"{s.geometry.name} {a.shift:+.3f} m" for s, a in refined)
@@ -50,4 +77,5 @@ def calibrate(calibration, out, overwrite: bool, workers, scheduler, console) ->
     console.print(
         frame_table(sd_errors(table), "D1 SD per segment, RMS error of the prediction [mm]")
     )
-    console.print(f"wrote settlement_fitted.toml, calibration.csv and calibration.png to {out}")
+    console.print(f"wrote {', '.join(files_of(result))} to {out}")
+    return result.converged

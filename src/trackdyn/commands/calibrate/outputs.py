@@ -1,4 +1,5 @@
-"""Files of a calibration: fitted parameter file, misfit per segment, figure."""
+"""Files of a calibration: fitted parameter file, fitted values, misfit per segment, the
+estimated rate field, figures."""
 
 from __future__ import annotations
 
@@ -10,14 +11,73 @@ import pandas as pd
 from trackdyn.calibration.fit import FitResult
 from trackdyn.calibration.problem import Calibration
 from trackdyn.calibration.surveys import d1_change
-from trackdyn.commands.calibrate.plots import calibration_figure
+from trackdyn.commands.calibrate.plots import calibration_figure, field_figure
 from trackdyn.deterioration.law_files import law_file_table, law_table_toml, law_units
 from trackdyn.track.quality import segment_sd
 from trackdyn.track.track import RAILS
 from trackdyn.units import UNITS
 
-FILES = ("settlement_fitted.toml", "calibration.csv", "calibration.png")
-"""Files a calibration writes."""
+FILES = ("settlement_fitted.toml", "fit.csv", "calibration.csv", "calibration.png")
+"""Files every calibration writes."""
+
+FIELD_FILES = ("rate_field.csv", "rate_field.png")
+"""Files of a calibration that estimates the rate field."""
+
+
+def files_of(result: FitResult) -> tuple[str, ...]:
+    """The files a calibration with ``result`` writes."""
+    return FILES + (FIELD_FILES if result.field is not None else ())
+
+
+def status(result: FitResult) -> str:
+    """``fitted``, or ``not converged`` with why."""
+    if result.converged:
+        return "fitted"
+    return f"not converged (stopped by {result.stopped_by})"
+
+
+def fit_table(problem: Calibration, result: FitResult) -> pd.DataFrame:
+    """Fitted parameters in the parameter file's units.
+
+    Columns: ``parameter``, ``value``, ``unit``, ``standard_error``, ``start``, ``lower``,
+    ``upper`` (the bounds of the fit), all in ``unit``; ``status`` (fitted or not
+    converged).
+
+    Parameters
+    ----------
+    problem : Calibration
+        The calibration.
+    result : FitResult
+        The fit.
+    """
+    lower = np.where(problem.log, np.exp(problem.lower), problem.lower)
+    upper = np.where(problem.log, np.exp(problem.upper), problem.upper)
+    rows = zip(problem.names, problem.units, result.values, result.standard_errors,
+               result.start, lower, upper, strict=True)  # fmt: skip
+    return pd.DataFrame([
+        {"parameter": name, "value": v / f, "unit": unit, "standard_error": se / f,
+         "start": v0 / f, "lower": lo / f, "upper": hi / f,
+         "status": "fitted" if result.converged else "not converged"}
+        for name, (unit, f), v, se, v0, lo, hi in rows
+    ])  # fmt: skip
+
+
+def field_table(result: FitResult) -> pd.DataFrame:
+    """The estimated settlement-rate factor per rail seat, for ``[settlement] rate_field``.
+
+    Columns: ``distance_m`` [m], ``rail``, ``factor`` [-], ``standard_error`` [-].
+
+    Parameters
+    ----------
+    result : FitResult
+        A fit with an estimated field.
+    """
+    field = result.field
+    return pd.DataFrame([
+        {"distance_m": x, "rail": rail, "factor": field.factor[r, i],
+         "standard_error": field.standard_error[r, i]}
+        for i, x in enumerate(field.position) for r, rail in enumerate(RAILS)
+    ])  # fmt: skip
 
 
 def _rms(values) -> float:
@@ -118,9 +178,22 @@ def parameter_file(problem: Calibration, result: FitResult, where: str) -> str:
     )
     fitted = dict(zip(problem.names, zip(result.values, result.standard_errors, strict=True),
                       strict=True))  # fmt: skip
+    lo, hi = problem.fitted_extent
+    if result.field is None:
+        ballast = (
+            "# Settlement-rate field: uniform (factor 1 at every rail seat, fit.rate_field).\n"
+        )
+    else:
+        ballast = (
+            "# Settlement-rate field: estimated per rail seat with these values, in\n"
+            '# rate_field.csv; use both: [settlement] rate_field = "rate_field.csv".\n'
+        )
     header = (
-        f"# Settlement law parameters fitted by `trackdyn calibrate {Path(where).name}`.\n"
-        f"# Surveys: {surveys}; supports {Path(problem.spec.track.supports).name}.\n\n"
+        f"# Settlement law parameters {status(result)} by "
+        f"`trackdyn calibrate {Path(where).name}`.\n"
+        f"# Surveys: {surveys}; supports {Path(problem.spec.track.supports).name}.\n"
+        f"# Compared: {lo:.1f}-{hi:.1f} m ({hi - lo:.1f} m) of the first survey's distances.\n"
+        f"{ballast}\n"
     )
     entries = {}
     for name, si_unit in law_units(s.law).items():
@@ -130,8 +203,9 @@ def parameter_file(problem: Calibration, result: FitResult, where: str) -> str:
             factor = UNITS[entry["unit"]][1]
             entry["value"] = value / factor
             entry["source"] = (
-                f"fitted by trackdyn calibrate ({Path(where).name}) to the D1-band change of "
-                f"the surveys {surveys}; standard error {se / factor:.3g} {entry['unit']}"
+                f"{status(result)} by trackdyn calibrate ({Path(where).name}) to "
+                f"the D1-band change of the surveys {surveys}; standard error "
+                f"{se / factor:.3g} {entry['unit']}"
             )
         elif name in s.overrides:
             entry = {"value": s.overrides[name], "unit": si_unit,
@@ -141,7 +215,7 @@ def parameter_file(problem: Calibration, result: FitResult, where: str) -> str:
 
 
 def write_calibration(problem: Calibration, result: FitResult, folder, where: str) -> pd.DataFrame:
-    """Write `FILES` into ``folder``; returns the segment table.
+    """Write `files_of` the result into ``folder``; returns the segment table.
 
     Parameters
     ----------
@@ -156,7 +230,11 @@ def write_calibration(problem: Calibration, result: FitResult, folder, where: st
     """
     folder = Path(folder)
     (folder / FILES[0]).write_text(parameter_file(problem, result, where))
+    fit_table(problem, result).to_csv(folder / FILES[1], index=False, float_format="%.6g")
     table = segment_table(problem, result)
-    table.to_csv(folder / FILES[1], index=False, float_format="%.4g")
-    calibration_figure(problem, result, folder / FILES[2])
+    table.to_csv(folder / FILES[2], index=False, float_format="%.4g")
+    calibration_figure(problem, result, table, folder / FILES[3])
+    if result.field is not None:
+        field_table(result).to_csv(folder / FIELD_FILES[0], index=False, float_format="%.6g")
+        field_figure(result.field, problem.fitted_extent, folder / FIELD_FILES[1])
     return table

@@ -28,10 +28,15 @@ min_correlation = 0.7           # refuse a survey whose D1 profile matches the f
 max_shift_m = 20                # largest distance offset searched
 loss_scale_mm = 0.2             # residual size where the soft-L1 loss turns linear
 ignore_m = [[700, 740]]         # distance ranges left out (bridges, switches)
-max_iterations = 30             # evaluations of the misfit
+max_iterations = 30             # evaluations of the misfit (each global fit)
+rate_field = "estimate"         # each rail seat's settlement-rate factor estimated with the
+                                # law (default), or "uniform": factor 1 everywhere
 ```
 
-``[loop] total_mgt`` and ``snapshot_every_mgt`` are refused: the surveys set them.
+``[loop] total_mgt`` and ``snapshot_every_mgt`` are refused: the surveys set them; so are
+``[settlement] rate_cov``, ``seed`` and ``rate_field``: a calibration does not run the
+deterioration model's random field, its field is ``fit.rate_field``
+(``rate_correlation_length_m`` is the estimate's correlation length).
 """
 
 from __future__ import annotations
@@ -61,7 +66,9 @@ class SurveySpec(Strict):
 
 class FitSpec(Strict):
     """``[fit]``: ``parameters`` to fit, ``min_correlation`` [-], ``max_shift_m`` [m],
-    ``loss_scale_mm`` [mm], ``ignore_m`` ranges [m], ``max_iterations``."""
+    ``loss_scale_mm`` [mm], ``ignore_m`` ranges [m], ``max_iterations`` (of each global
+    fit), ``rate_field``: ``"estimate"`` (each rail seat's settlement-rate factor, with the
+    law) or ``"uniform"``."""
 
     parameters: list[str] = Field(min_length=1)
     min_correlation: float = Field(0.7, gt=0, le=1)
@@ -69,6 +76,7 @@ class FitSpec(Strict):
     loss_scale_mm: PositiveFloat = 0.2
     ignore_m: list[tuple[float, float]] = Field(default_factory=list)
     max_iterations: PositiveInt = 30
+    rate_field: Literal["estimate", "uniform"] = "estimate"
 
     @model_validator(mode="after")
     def _check(self):
@@ -110,6 +118,12 @@ class CalibrationScenario(DeteriorationScenario):
         given = sorted({"total_mgt", "snapshot_every_mgt"} & self.loop.model_fields_set)
         if given:
             raise ValueError(f"loop.{given[0]}: set by the survey tonnages, leave it out")
+        given = sorted({"rate_cov", "seed", "rate_field"} & self.settlement.model_fields_set)
+        if given:
+            raise ValueError(
+                f"settlement.{given[0]}: a calibration estimates the rate field or takes it "
+                'uniform (fit.rate_field = "estimate" or "uniform"), leave it out'
+            )
         return self
 
 

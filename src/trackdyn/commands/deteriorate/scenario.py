@@ -24,6 +24,7 @@ overrides = {}                  # law parameters, SI units
 rate_cov = 0.3                  # lognormal settlement-rate factor per sleeper (illustrative)
 rate_correlation_length_m = 3   # its correlation length along the track (illustrative)
 seed = 0
+# rate_field = "rate_field.csv" # or the factor per rail seat (trackdyn calibrate's file)
 
 [loop]
 total_mgt = 50
@@ -108,7 +109,8 @@ DEFAULT_TRAFFIC = [
 class SettlementSpec(Strict):
     """``[settlement]``: ``law`` name, parameter ``file``, ``overrides`` [SI], the lognormal
     settlement-rate field's ``rate_cov`` [-], ``rate_correlation_length_m`` [m] (defaults
-    those of `LoopOptions`) and ``seed``."""
+    those of `LoopOptions`) and ``seed``, or ``rate_field``, a CSV file of the factor per
+    rail seat (`trackdyn.deterioration.ballast.read_rate_field`)."""
 
     law: str = "power"
     file: Path | None = None
@@ -116,6 +118,13 @@ class SettlementSpec(Strict):
     rate_cov: NonNegativeFloat = _default("rate_cov")
     rate_correlation_length_m: PositiveFloat = _default("rate_correlation_length")
     seed: int = Field(0, ge=0)
+    rate_field: Path | None = None
+
+    @model_validator(mode="after")
+    def _one_field(self):
+        if self.rate_field is not None and {"rate_cov", "seed"} & self.model_fields_set:
+            raise ValueError("give rate_field or rate_cov and seed, not both")
+        return self
 
     @field_validator("law")
     @classmethod

@@ -18,7 +18,8 @@ import re
 from pathlib import Path
 
 from trackdyn.commands.deteriorate.scenario import loop_options, resolve_inputs
-from trackdyn.data import EXAMPLE_ZONES, example_path
+from trackdyn.data import EXAMPLE_ZONES, example_path, load_track
+from trackdyn.deterioration.ballast import read_rate_field
 from trackdyn.deterioration.law_files import load_law
 from trackdyn.deterioration.runs import Section, SectionTask
 from trackdyn.deterioration.zones import read_zones
@@ -112,15 +113,20 @@ def section_tasks(spec, base: Path, progress: bool = False) -> list[SectionTask]
     def load(kind, file):
         return load_law(s.law, file or own, kind, **s.overrides)
 
-    def options(i, example):
-        return loop_options(spec, (spec.settlement.seed, i), example)
+    def options(i, sec):
+        o = loop_options(spec, (spec.settlement.seed, i), sec.geometry is None)
+        if s.rate_field is None:
+            return o
+        position = load_track(sec.geometry, sec.supports).supports.position
+        factor = read_rate_field(base / s.rate_field, position)
+        return o.model_copy(update={"rate_factor": tuple(map(tuple, factor.tolist()))})
 
     return [
         SectionTask(
             sec,
             tuple(traffic),
             law,
-            options(i, sec.geometry is None),
+            options(i, sec),
             progress,
             tuple(read_zones(sec.zones, load)) if sec.zones else (),
         )  # fmt: skip
