@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from trackdyn.commands.deteriorate.outputs import write_outputs
 from trackdyn.commands.deteriorate.scenario import load_deterioration
 from trackdyn.commands.deteriorate.sections import read_sections, section_tasks
 from trackdyn.deterioration.runs import run_sections
@@ -49,7 +50,7 @@ def folder(tmp_path_factory):
     return path
 
 
-def test_one_and_two_workers_give_identical_results(folder):
+def test_one_and_two_workers_give_identical_results(folder, tmp_path):
     spec, base = load_deterioration(folder / "scenario.toml")
     tasks = section_tasks(spec, base)
     assert [t.section.name for t in tasks] == ["a", "b"]
@@ -62,6 +63,11 @@ def test_one_and_two_workers_give_identical_results(folder):
     # the sections differ (different tracks, per-section scatter seeds)
     a, b = (ds.settlement.isel(mgt=-1).values for ds in serial)
     assert a.shape == b.shape and not np.allclose(a, b)
+    # a line of sections gets one straight-line diagram of the whole line
+    for ds, task in zip(serial, tasks, strict=True):
+        ds.attrs["section"] = task.section.name
+    names = write_outputs(serial, tmp_path)
+    assert "line.png" in names and (tmp_path / "line.png").read_bytes()[:4] == b"\x89PNG"
 
 
 @pytest.mark.parametrize(

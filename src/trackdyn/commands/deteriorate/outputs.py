@@ -7,6 +7,7 @@ import pandas as pd
 
 from trackdyn.commands.deteriorate.plots import (
     geometry_evolution,
+    line_diagram,
     quality_evolution,
     settlement_map,
     straight_line_diagram,
@@ -194,7 +195,8 @@ def write_outputs(datasets, folder) -> list[str]:
     figures ``<name>_geometry.png``, ``<name>_quality.png`` (the life cycle: D1 SD per
     segment with the tampings), ``<name>_settlement_map.png``, ``<name>_straight_line.png``
     (segments along the chainage against tonnage); for all sections: ``summary.csv``,
-    ``quality.csv``, ``maintenance.csv`` (first triggers), ``steps.csv``,
+    ``quality.csv``, ``maintenance.csv`` (first triggers), ``steps.csv``, ``line.png``
+    (for two or more sections: the straight-line diagram of the whole line),
     ``vehicle_shares.csv`` and, with maintenance, ``interventions.csv`` and
     ``life_cycle.csv``.
 
@@ -225,6 +227,9 @@ def write_outputs(datasets, folder) -> list[str]:
         ):
             draw(ds, folder / f"{name}_{kind}.png", title)
             names.append(f"{name}_{kind}.png")
+    if len(datasets) > 1:
+        line_diagram(datasets, folder / "line.png", f"{len(datasets)} sections")
+        names.append("line.png")
     csv(summary(datasets), "summary.csv")
     tables = [
         ("quality.csv", quality_table),

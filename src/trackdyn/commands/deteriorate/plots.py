@@ -162,22 +162,10 @@ def straight_line_diagram(ds, path, title: str = "") -> None:
         2, 1, figsize=(11, 7), sharex=True, gridspec_kw={"height_ratios": [1, 6]}
     )
     threshold = float(ds.attrs["option_threshold_sd_mm"])
-    edges_x = np.append(ds.segment_start.values, ds.segment_end.values[-1])
-    mgt = ds.mgt.values
-    edges_m = np.append(mgt, mgt[-1])  # each state holds until the next
-    worse = ds.d1_sd.max("rail").values  # (mgt, segment)
-    mesh = ax.pcolormesh(edges_x, edges_m, worse[:, :], shading="flat", cmap="RdYlGn_r",
-                         vmin=0.0, vmax=max(2 * threshold, float(worse.max())))  # fmt: skip
+    mesh = _quality_mesh(ax, ds, 0.0, _top(ds, threshold))
     bar = fig.colorbar(mesh, ax=[top, ax], label="D1 SD, worse rail [mm]")
     bar.ax.axhline(threshold, color="k", lw=1.5)
-    mid = 0.5 * (ds.segment_start.values + ds.segment_end.values)
-    seg = ds.intervention_segment.values
-    kinds = ds.intervention_kind.values.astype(str)
-    for kind, marker in (("tamping", "o"), ("renewal", "s")):
-        on = kinds == kind
-        if on.any():
-            ax.plot(mid[seg[on]], ds.intervention_mgt.values[on], marker, ms=5, mfc="white",
-                    mec="k", ls="none", label=kind)  # fmt: skip
+    mgt, seg = ds.mgt.values, ds.intervention_segment.values
     ax.set_ylabel("accumulated traffic [MGT]")
     ax.set_xlabel("distance [m]")
     ax.set_ylim(0.0, float(mgt[-1]))
@@ -197,5 +185,71 @@ def straight_line_diagram(ds, path, title: str = "") -> None:
     top.set_ylabel("zones", rotation=0, ha="right", va="center")
     top.legend(loc="lower left", bbox_to_anchor=(0.0, 1.02), ncol=len(names) + 1, fontsize=8)
     fig.suptitle(title or "Straight-line diagram")
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def _top(ds, threshold: float) -> float:
+    """Top of the D1 SD colour scale [mm]: twice the threshold, or the worst value."""
+    return max(2 * threshold, float(ds.d1_sd.max()))
+
+
+def _quality_mesh(ax, ds, offset: float, vmax: float):
+    """Draw a section's segments against tonnage coloured by the D1 SD of the worse rail,
+    and its tampings and renewals, ``offset`` [m] along the x axis; return the mesh."""
+    edges_x = offset + np.append(ds.segment_start.values, ds.segment_end.values[-1])
+    mgt = ds.mgt.values
+    edges_m = np.append(mgt, mgt[-1])  # each state holds until the next
+    mesh = ax.pcolormesh(edges_x, edges_m, ds.d1_sd.max("rail").values, shading="flat",
+                         cmap="RdYlGn_r", vmin=0.0, vmax=vmax)  # fmt: skip
+    mid = offset + 0.5 * (ds.segment_start.values + ds.segment_end.values)
+    seg = ds.intervention_segment.values
+    kinds = ds.intervention_kind.values.astype(str)
+    for kind, marker in (("tamping", "o"), ("renewal", "s")):
+        on = kinds == kind
+        if on.any():
+            ax.plot(mid[seg[on]], ds.intervention_mgt.values[on], marker, ms=5, mfc="white",
+                    mec="k", ls="none", label=kind)  # fmt: skip
+    return mesh
+
+
+def line_diagram(datasets, path, title: str = "") -> None:
+    """The straight-line diagram of a whole line: every section's segments end to end in
+    the order of the sections list, against tonnage, coloured by the D1 SD of the worse
+    rail, with the tampings; one colour scale and the threshold for all.
+
+    Parameters
+    ----------
+    datasets : list of xarray.Dataset
+        Results of `trackdyn.deterioration.predict` with a ``section`` attribute.
+    path : path
+        PNG file to write.
+    title : str
+        Figure title.
+    """
+    threshold = max(float(ds.attrs["option_threshold_sd_mm"]) for ds in datasets)
+    vmax = max(_top(ds, threshold) for ds in datasets)
+    fig, ax = plt.subplots(figsize=(12, 6))
+    offset, mesh = 0.0, None
+    for ds in datasets:
+        start = float(ds.segment_start[0])
+        mesh = _quality_mesh(ax, ds, offset - start, vmax)
+        length = float(ds.segment_end[-1]) - start
+        ax.axvline(offset, color="k", lw=0.8)
+        ax.text(offset + length / 2, 1.01, ds.attrs["section"], transform=ax.get_xaxis_transform(),
+                ha="center", va="bottom", fontsize=8)  # fmt: skip
+        offset += length
+    bar = fig.colorbar(mesh, ax=ax, label="D1 SD, worse rail [mm]")
+    bar.ax.axhline(threshold, color="k", lw=1.5)
+    handles, labels = ax.get_legend_handles_labels()
+    keep = {label: h for h, label in zip(handles, labels, strict=True)}
+    if keep:
+        ax.legend(keep.values(), keep.keys(), loc="upper left", bbox_to_anchor=(0.0, -0.1),
+                  ncol=2, fontsize=8)  # fmt: skip
+    ax.set_xlim(0.0, offset)
+    ax.set_ylim(0.0, max(float(ds.mgt[-1]) for ds in datasets))
+    ax.set_xlabel("distance along the line, sections end to end [m]")
+    ax.set_ylabel("accumulated traffic [MGT]")
+    fig.suptitle(title or "Straight-line diagram of the line")
     fig.savefig(path, dpi=120)
     plt.close(fig)
