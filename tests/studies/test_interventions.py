@@ -167,3 +167,31 @@ def test_bad_input_is_refused_in_one_line_naming_file_and_key(folder, tmp_path, 
     line = " ".join(result.output.split())
     assert message in line
     assert not out.exists()
+
+
+def test_the_shipped_example_expands_to_its_alternatives(tmp_path):
+    to = tmp_path / "ex"
+    assert runner.invoke(app, ["example", "interventions", "--to", str(to)]).exit_code == 0
+    study, _ = load_toml(InterventionsStudy, to / "interventions.toml")
+    labelled, _ = alternative_tasks(study, to / "interventions.toml", tmp_path)
+    assert [name for name, _ in labelled] == [a.name for a in study.alternative]  # 1 section
+    # only soft-spot-fixed scales supports; a section of files is named after its geometry
+    assert [p.name for p in tmp_path.glob("*.csv")] == ["soft-spot-fixed_geometry_supports.csv"]
+
+
+@pytest.mark.slow
+def test_fixing_the_example_soft_spot_lengthens_its_segment_interval(tmp_path):
+    """The issue's check on the built-in example: its soft spot (300 m) lies in the
+    200.5-400.5 m segment; 50 MGT of the example traffic, the 4-DOF model (~1 min)."""
+    to = tmp_path / "ex"
+    assert runner.invoke(app, ["example", "interventions", "--to", str(to)]).exit_code == 0
+    text = (to / "interventions.toml").read_text()
+    (to / "two.toml").write_text(text[: text.index('[[alternative]]\nname = "high')])
+    out = tmp_path / "out"
+    args = ["study", str(to / "two.toml"), "--out", str(out), "--workers", "2"]
+    assert runner.invoke(app, args).exit_code == 0
+    segments = pd.read_csv(out / "interventions_segments.csv")
+    spot = segments[segments["segment_start_m"] == 200.5].set_index("alternative")
+    assert spot.loc["soft-spot-fixed", "interventions"] < spot.loc["base", "interventions"]
+    interval = spot["mean_interval_mgt"]
+    assert interval["soft-spot-fixed"] > interval["base"]

@@ -223,7 +223,7 @@ def plot_comparison(table: pd.DataFrame, path, title: str) -> None:
                edgecolor="k", hatch="//")  # fmt: skip
         ax.set_ylabel(label)
         ax.grid(axis="y", alpha=0.3)
-        ax.tick_params(axis="x", rotation=20)
+        plt.setp(ax.get_xticklabels(), rotation=25, ha="right")
     fig.suptitle(title)
     save(fig, path)
 
