@@ -1,5 +1,7 @@
 """Interventions study: a soft-spot fix, an alternative without changes, costs, bad input."""
 
+import dataclasses
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -9,8 +11,13 @@ from typer.testing import CliRunner
 from trackdyn.cli import app
 from trackdyn.commands.deteriorate.scenario import load_deterioration
 from trackdyn.commands.deteriorate.sections import section_tasks
-from trackdyn.commands.interventions import InterventionsStudy, alternative_tasks
+from trackdyn.commands.interventions import (
+    InterventionsStudy,
+    alternative_tasks,
+    run_alternatives,
+)
 from trackdyn.deterioration.runs import run_sections
+from trackdyn.errors import TrackdynInputError
 from trackdyn.io import read_supports, write_geometry, write_supports
 from trackdyn.options import load_toml
 from trackdyn.studies.interventions import Scale, costs, scale_supports
@@ -129,13 +136,22 @@ def test_costs_in_closed_form():
 def test_an_alternative_without_changes_is_the_scenario_itself(folder, tmp_path):
     study, _ = load_toml(InterventionsStudy, folder / "study.toml")
     labelled, _ = alternative_tasks(study, folder / "study.toml", tmp_path)
-    alone = [t for name, t in labelled if name == "base"]
+    alone = [(name, t) for name, t in labelled if name == "base"]
     spec, base = load_deterioration(folder / "scenario.toml")
-    got = run_sections(alone, workers=1)[0]
+    got = run_alternatives(alone, workers=1)[0]
     expected = run_sections(section_tasks(spec, base), workers=1)[0]
     for ds in (got, expected):  # the run's timings differ from run to run
         ds.attrs = {k: v for k, v in ds.attrs.items() if not k.startswith("time_")}
     xr.testing.assert_identical(got, expected)
+
+
+def test_a_failed_run_names_its_section_and_alternative(folder, tmp_path):
+    study, _ = load_toml(InterventionsStudy, folder / "study.toml")
+    labelled, _ = alternative_tasks(study, folder / "study.toml", tmp_path)
+    name, task = labelled[1]
+    gone = dataclasses.replace(task.section, supports=str(tmp_path / "gone.csv"))
+    with pytest.raises(TrackdynInputError, match="section geometry of alternative 'spot-fixed': "):
+        run_alternatives([(name, dataclasses.replace(task, section=gone))], workers=1)
 
 
 BAD = {
@@ -151,8 +167,12 @@ BAD = {
     "unknown section": (
         'name = "x"\nsupports_scale = [{ from_m = 1, to_m = 5, factor = 2, section = "km9" }]',
         "study.toml: alternative 'x': supports_scale: no section 'km9'"),
+    "a wedge that locks": (  # mu = 0.8 locks the wedge (above tan 36.3 deg = 0.73)
+        'name = "x"\nvehicle_overrides = { mu = 0.8 }',
+        "study.toml: alternative 'x': traffic 1: vehicle parameter mu = 0.8 locks the wedge"),
     "unknown law parameter": (
-        'name = "x"\nsettlement_overrides = { nonsense = 1.0 }', "study.toml: alternative 'x'"),
+        'name = "x"\nsettlement_overrides = { nonsense = 1.0 }',
+        "study.toml: alternative 'x': unknown settlement parameter of the sato law 'nonsense'"),
 }  # fmt: skip
 
 

@@ -178,6 +178,22 @@ def alternative_tasks(study: InterventionsStudy, path, folder: Path):
     return tasks, spec
 
 
+def run_alternatives(labelled, *, workers=None, scheduler=None, progress=False) -> list:
+    """Run the ``(alternative, task)`` pairs of `alternative_tasks` through `run_sections`;
+    the Datasets in order. A failed run is refused naming its section and alternative."""
+    from trackdyn.deterioration.runs import run_sections
+
+    tasks = [
+        dataclasses.replace(t, section=dataclasses.replace(
+            t.section, name=f"{t.section.name} of alternative {alt!r}"))
+        for alt, t in labelled
+    ]  # fmt: skip
+    datasets = run_sections(tasks, workers=workers, scheduler=scheduler, progress=progress)
+    for (_, t), ds in zip(labelled, datasets, strict=True):
+        ds.attrs["section"] = t.section.name
+    return datasets
+
+
 def compare(study: InterventionsStudy, names, datasets) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The comparison (one row per alternative) and the life cycle of every segment.
 
@@ -247,20 +263,18 @@ def interventions(path, out, overwrite: bool, workers, scheduler, console) -> No
     console : rich.console.Console
         Where the table is shown.
     """
-    from trackdyn.deterioration.runs import run_sections
-
     study, _ = load_toml(InterventionsStudy, path)
     require_workers(workers)
     with tempfile.TemporaryDirectory(prefix="trackdyn-interventions-") as scratch:
         labelled, spec = alternative_tasks(study, path, Path(scratch))
-        names, tasks = map(list, zip(*labelled, strict=True))
         title = f"trackdyn study: interventions, {len(study.alternative)} alternatives"
         record = Record(title, {"study": path, "scenario": scenario_file(study, path)},
                         {"study": study.model_dump(mode="json"),
                          "scenario": spec.model_dump(mode="json")})  # fmt: skip
         with output_folder(out, "study", overwrite, record) as stage:
-            datasets = run_sections(tasks, workers=workers, scheduler=scheduler, progress=True)
-            table, segments = compare(study, names, datasets)
+            datasets = run_alternatives(labelled, workers=workers, scheduler=scheduler,
+                                        progress=True)  # fmt: skip
+            table, segments = compare(study, [alt for alt, _ in labelled], datasets)
             record.headline = {"alternatives": table.to_dict(orient="records")}
             write_netcdf(table.set_index("alternative").to_xarray(),
                          stage / "interventions_compared.nc")  # fmt: skip
