@@ -215,3 +215,17 @@ def test_fixing_the_example_soft_spot_lengthens_its_segment_interval(tmp_path):
     assert spot.loc["soft-spot-fixed", "interventions"] < spot.loc["base", "interventions"]
     interval = spot["mean_interval_mgt"]
     assert interval["soft-spot-fixed"] > interval["base"]
+
+
+def test_a_scenario_without_maintenance_is_refused(folder, tmp_path):
+    text = SCENARIO.replace("[maintenance]\nmin_interval_mgt = 1\n", "")
+    (tmp_path / "plain.toml").write_text(text.replace("recovery_offset_mm = 0.05", ""))
+    for name in ("geometry.csv", "supports.csv"):
+        (tmp_path / name).write_bytes((folder / name).read_bytes())
+    study = STUDY.replace('scenario = "scenario.toml"', 'scenario = "plain.toml"')
+    (tmp_path / "study.toml").write_text(study)
+    out = tmp_path / "out"
+    result = runner.invoke(app, ["study", str(tmp_path / "study.toml"), "--out", str(out)])
+    assert result.exit_code == 2
+    assert "plain.toml: no [maintenance] table: nothing to compare" in result.output
+    assert not out.exists()
