@@ -170,7 +170,8 @@ def study(
         str | None, typer.Option(help="Address of a running Dask scheduler, tcp://HOST:PORT.")
     ] = None,
 ):
-    """Run a study (scenario matrix, parameter variation or speed sweep) on Dask."""
+    """Run a study (scenario matrix, parameter variation, speed sweep or interventions
+    compared) on Dask."""
     from trackdyn.commands.study import study as job
 
     job(study_file, out, overwrite, workers, scheduler, console)
@@ -247,7 +248,7 @@ def example(
     name: Annotated[
         str | None,
         typer.Argument(
-            help="run, deteriorate, sections, study or calibration; none: list the examples."
+            help="run, deteriorate, sections, study, interventions or calibration; none: list them."
         ),
     ] = None,
     to: Annotated[

@@ -48,6 +48,16 @@ EXAMPLES: dict[str, tuple[str, dict[str, str], str]] = {
         },
         "trackdyn study {to}/sensitivity.toml --out study-out",
     ),
+    "interventions": (
+        "an interventions study: the example section with tamping, four alternatives, 50 MGT",
+        {
+            "interventions.toml": "examples/interventions.toml",
+            "maintained.toml": "examples/maintained.toml",
+            **_TRACK,
+            **_ZONES,
+        },
+        "trackdyn study {to}/interventions.toml --out interventions-out",
+    ),
     "calibration": (
         "a calibration with three synthetic surveys of a 200 m section",
         {

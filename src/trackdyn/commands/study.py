@@ -10,6 +10,7 @@ from trackdyn.commands import plots
 from trackdyn.commands.run import scenario_record
 from trackdyn.commands.tables import frame_table
 from trackdyn.errors import TrackdynInputError, named
+from trackdyn.io import read_toml
 from trackdyn.netcdf import write_netcdf
 from trackdyn.options import RunOptions, load_toml
 from trackdyn.progress import note
@@ -81,7 +82,8 @@ def write_study(table, ds, study, folder, sleeper_spacing=None) -> list[str]:
 
 
 def study(study_file, out, overwrite: bool, workers, scheduler, console) -> None:
-    """Run a study and write study.nc, study.csv and its figures into ``out``.
+    """Run a study and write study.nc, study.csv and its figures into ``out``; an
+    interventions study (`trackdyn.commands.interventions`) writes its own files.
 
     Parameters
     ----------
@@ -101,6 +103,10 @@ def study(study_file, out, overwrite: bool, workers, scheduler, console) -> None
     from trackdyn.studies.runner import gather, run_study
     from trackdyn.studies.scenarios import tasks
 
+    if study_file is not None and read_toml(study_file).get("kind") == "interventions":
+        from trackdyn.commands.interventions import interventions
+
+        return interventions(study_file, out, overwrite, workers, scheduler, console)
     spec, base = load_study(study_file)
     with named(study_file):
         track = spec.track.load(base)  # a bad track file is refused before any run

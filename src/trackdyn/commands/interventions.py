@@ -1,0 +1,288 @@
+"""`trackdyn study` of ``kind = "interventions"``: one deterioration scenario with
+maintenance under alternatives, side by side with their costs.
+
+```toml
+kind = "interventions"
+scenario = "deteriorate.toml"    # a trackdyn deteriorate scenario with [maintenance]
+
+[costs]                          # the user's currency, undiscounted over the horizon
+tamping_per_m = 10.0             # per metre of segment tamped
+renewal_per_m = 0.0              # per metre of segment whose ballast is renewed
+
+[[alternative]]
+name = "base"                    # no changes: the scenario as it is
+
+[[alternative]]
+name = "soft-spot-fixed"
+cost = 5000.0                    # of the intervention itself
+supports_scale = [{ from_m = 560, to_m = 580, factor = 2.0 }]   # section = "..." optional
+# settlement_overrides = { alpha = 0.3 }    # merged into [settlement] overrides
+# vehicle_overrides = { mu = 0.2 }          # merged into every [[traffic]] overrides
+# threshold_sd_mm = 2.0                     # replaces [loop] threshold_sd_mm
+```
+
+Every alternative runs every section of the scenario with the same rate-field and
+maintenance seeds, so an alternative without changes gives the scenario's own results.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tempfile
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+import pandas as pd
+from pydantic import Field, NonNegativeFloat, PositiveFloat, StrictFloat, model_validator
+
+from trackdyn.commands.deteriorate.outputs import life_cycle_table
+from trackdyn.commands.deteriorate.scenario import DeteriorationScenario, load_deterioration
+from trackdyn.commands.deteriorate.sections import NAME, section_tasks
+from trackdyn.commands.plots import TAB10, plt, save
+from trackdyn.commands.tables import frame_table
+from trackdyn.data import EXAMPLE_GEOMETRY, EXAMPLE_SUPPORTS, example_path
+from trackdyn.deterioration.runs import Section
+from trackdyn.errors import TrackdynInputError, named, require_workers
+from trackdyn.netcdf import write_netcdf
+from trackdyn.options import Strict, load_toml, parse
+from trackdyn.staging import Record, output_folder
+from trackdyn.studies.interventions import (
+    Scale,
+    costs,
+    maintenance_totals,
+    scale_supports,
+    support_extent,
+)
+
+
+class SupportsScale(Strict):
+    """One range of ``supports_scale``: stiffness times ``factor`` [-] from ``from_m`` to
+    ``to_m`` [m] of ``section`` (default: every section)."""
+
+    from_m: float
+    to_m: float
+    factor: PositiveFloat
+    section: str | None = None
+
+    @model_validator(mode="after")
+    def _ordered(self):
+        if self.to_m <= self.from_m:
+            raise ValueError(f"to_m {self.to_m:g} m is not beyond from_m {self.from_m:g} m")
+        return self
+
+
+class Alternative(Strict):
+    """``[[alternative]]``: a ``name``, its ``cost`` and the changes it makes."""
+
+    name: str = Field(pattern=NAME.pattern)
+    cost: NonNegativeFloat = 0.0
+    supports_scale: list[SupportsScale] = Field(default_factory=list)
+    settlement_overrides: dict[str, StrictFloat] = Field(default_factory=dict)
+    vehicle_overrides: dict[str, StrictFloat] = Field(default_factory=dict)
+    threshold_sd_mm: PositiveFloat | None = None
+
+
+class Costs(Strict):
+    """``[costs]``: ``tamping_per_m`` and ``renewal_per_m`` (the user's currency per m)."""
+
+    tamping_per_m: NonNegativeFloat = 0.0
+    renewal_per_m: NonNegativeFloat = 0.0
+
+
+class InterventionsStudy(Strict):
+    """An interventions study file."""
+
+    kind: Literal["interventions"]
+    scenario: Path
+    costs: Costs = Costs()
+    alternative: list[Alternative] = Field(min_length=1)
+
+    @model_validator(mode="after")
+    def _unique(self):
+        names = [a.name for a in self.alternative]
+        repeated = sorted({n for n in names if names.count(n) > 1})
+        if repeated:
+            raise ValueError(f"alternative name {repeated[0]!r} is repeated")
+        return self
+
+
+def alternative_scenario(spec: DeteriorationScenario, alt: Alternative, where: str):
+    """The deterioration scenario with an alternative's overrides and threshold, checked."""
+    data = spec.model_dump(exclude_unset=True)
+    data["traffic"] = [
+        {**t.model_dump(exclude_unset=True), "overrides": {**t.overrides, **alt.vehicle_overrides}}
+        for t in spec.traffic
+    ]
+    settlement = data.setdefault("settlement", {})
+    settlement["overrides"] = {**spec.settlement.overrides, **alt.settlement_overrides}
+    if alt.threshold_sd_mm is not None:
+        data.setdefault("loop", {})["threshold_sd_mm"] = alt.threshold_sd_mm
+    return parse(DeteriorationScenario, data, where)
+
+
+def _scaled_section(sec: Section, alt: Alternative, folder: Path) -> Section:
+    """The section with the alternative's supports ranges applied (written to ``folder``)."""
+    mine = [s for s in alt.supports_scale if s.section in (None, sec.name)]
+    if not mine:
+        return sec
+    source = sec.supports or str(example_path(EXAMPLE_SUPPORTS))
+    first, last = support_extent(source)
+    for s in mine:
+        if s.from_m < first or s.to_m > last:
+            raise TrackdynInputError(
+                f"supports_scale {s.from_m:g}-{s.to_m:g} m is outside section "
+                f"{sec.name}'s supports ({first:g}-{last:g} m)"
+            )
+    target = folder / f"{alt.name}_{sec.name}_supports.csv"
+    scale_supports(source, target, [Scale(s.from_m, s.to_m, s.factor) for s in mine])
+    geometry = sec.geometry or str(example_path(EXAMPLE_GEOMETRY))
+    return dataclasses.replace(sec, geometry=geometry, supports=str(target))
+
+
+def scenario_file(study: InterventionsStudy, path) -> Path:
+    """The deterioration scenario a study file names (relative to the study file)."""
+    return Path(path).resolve().parent / study.scenario
+
+
+def alternative_tasks(study: InterventionsStudy, path, folder: Path):
+    """The section tasks of every alternative, in order, and the scenario.
+
+    Parameters
+    ----------
+    study : InterventionsStudy
+        The study file.
+    path : path
+        Its file, named in messages; relative paths start from its folder.
+    folder : Path
+        Where scaled supports files are written for the runs.
+    """
+    scenario_path = scenario_file(study, path)
+    if not scenario_path.is_file():
+        raise TrackdynInputError(f"{path}: scenario: {scenario_path}: no such file")
+    spec, base = load_deterioration(scenario_path)
+    if spec.maintenance is None:
+        raise TrackdynInputError(f"{scenario_path}: no [maintenance] table: nothing to compare")
+    tasks = []
+    for alt in study.alternative:
+        where = f"{path}: alternative {alt.name!r}"
+        with named(where):
+            sections = section_tasks(alternative_scenario(spec, alt, where), base)
+            names = {t.section.name for t in sections}
+            unknown = sorted({s.section for s in alt.supports_scale} - names - {None})
+            if unknown:
+                raise TrackdynInputError(f"supports_scale: no section {unknown[0]!r}")
+            for t in sections:
+                sec = _scaled_section(t.section, alt, folder)
+                tasks.append((alt.name, dataclasses.replace(t, section=sec)))
+    return tasks, spec
+
+
+def run_alternatives(labelled, *, workers=None, scheduler=None, progress=False) -> list:
+    """Run the ``(alternative, task)`` pairs of `alternative_tasks` through `run_sections`;
+    the Datasets in order. A failed run is refused naming its section and alternative."""
+    from trackdyn.deterioration.runs import run_sections
+
+    tasks = [
+        dataclasses.replace(t, section=dataclasses.replace(
+            t.section, name=f"{t.section.name} of alternative {alt!r}"))
+        for alt, t in labelled
+    ]  # fmt: skip
+    datasets = run_sections(tasks, workers=workers, scheduler=scheduler, progress=progress)
+    for (_, t), ds in zip(labelled, datasets, strict=True):
+        ds.attrs["section"] = t.section.name
+    return datasets
+
+
+def compare(study: InterventionsStudy, names, datasets) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The comparison (one row per alternative) and the life cycle of every segment.
+
+    Parameters
+    ----------
+    study : InterventionsStudy
+        The study (costs, alternatives).
+    names : list of str
+        The alternative of each Dataset.
+    datasets : list of xarray.Dataset
+        The sections' results, in the order of ``names``.
+    """
+    rows, segments = [], []
+    c = study.costs
+    for alt in study.alternative:
+        mine = [ds for n, ds in zip(names, datasets, strict=True) if n == alt.name]
+        totals = maintenance_totals(mine)
+        rows.append({"alternative": alt.name, **totals,
+                     **costs(totals, c.tamping_per_m, c.renewal_per_m, alt.cost)})  # fmt: skip
+        for ds in mine:
+            segments.append(life_cycle_table(ds).assign(alternative=alt.name))
+    frame = pd.concat(segments, ignore_index=True)
+    return pd.DataFrame(rows), frame[["alternative", *frame.columns[:-1]]]
+
+
+def plot_comparison(table: pd.DataFrame, path, title: str) -> None:
+    """Bars per alternative: tampings (renewals hatched on top), mean interval [MGT],
+    life-cycle cost (the intervention's own cost hatched on top)."""
+    panels = (
+        ("tampings", "renewals", "tampings, renewals hatched [-]"),
+        ("mean_interval_mgt", None, "mean interval [MGT]"),
+        ("life_cycle_cost", "intervention_cost", "life-cycle cost, intervention hatched"),
+    )
+    fig, axes = plt.subplots(1, 3, figsize=(12, 4))
+    colours = np.array([TAB10[i % len(TAB10)] for i in range(len(table))])
+    names = table["alternative"]
+    for ax, (key, top, label) in zip(axes, panels, strict=True):
+        total = table[key] + (table[top] if key == "tampings" else 0.0)
+        hatched = table[top] if top else 0.0 * total
+        ax.bar(names, total - hatched, color=colours)
+        shown = hatched > 0
+        ax.bar(names[shown], hatched[shown], bottom=(total - hatched)[shown], color=colours[shown],
+               edgecolor="k", hatch="//")  # fmt: skip
+        ax.set_ylabel(label)
+        ax.grid(axis="y", alpha=0.3)
+        plt.setp(ax.get_xticklabels(), rotation=25, ha="right")
+    fig.suptitle(title)
+    save(fig, path)
+
+
+def interventions(path, out, overwrite: bool, workers, scheduler, console) -> None:
+    """Run an interventions study; write interventions_compared.csv/.nc, the life cycle per
+    segment (interventions_segments.csv) and interventions_compared.png.
+
+    Parameters
+    ----------
+    path : path
+        Study TOML file (``kind = "interventions"``).
+    out : str or Path
+        Output folder.
+    overwrite : bool
+        Replace another command's outputs in ``out``.
+    workers : int, optional
+        Worker processes (default: one per core; 1: serial).
+    scheduler : str, optional
+        Address of a running Dask scheduler.
+    console : rich.console.Console
+        Where the table is shown.
+    """
+    study, _ = load_toml(InterventionsStudy, path)
+    require_workers(workers)
+    with tempfile.TemporaryDirectory(prefix="trackdyn-interventions-") as scratch:
+        labelled, spec = alternative_tasks(study, path, Path(scratch))
+        title = f"trackdyn study: interventions, {len(study.alternative)} alternatives"
+        record = Record(title, {"study": path, "scenario": scenario_file(study, path)},
+                        {"study": study.model_dump(mode="json"),
+                         "scenario": spec.model_dump(mode="json")})  # fmt: skip
+        with output_folder(out, "study", overwrite, record) as stage:
+            datasets = run_alternatives(labelled, workers=workers, scheduler=scheduler,
+                                        progress=True)  # fmt: skip
+            table, segments = compare(study, [alt for alt, _ in labelled], datasets)
+            record.headline = {"alternatives": table.to_dict(orient="records")}
+            write_netcdf(table.set_index("alternative").to_xarray(),
+                         stage / "interventions_compared.nc")  # fmt: skip
+            table.to_csv(stage / "interventions_compared.csv", index=False, float_format="%.6g")
+            segments.to_csv(stage / "interventions_segments.csv", index=False,
+                            float_format="%.6g")  # fmt: skip
+            plot_comparison(table, stage / "interventions_compared.png",
+                            f"Interventions over {spec.horizon_mgt:g} MGT")  # fmt: skip
+    console.print(frame_table(table, f"Interventions over {spec.horizon_mgt:g} MGT"))
+    console.print(f"wrote interventions_compared.csv/.nc/.png and interventions_segments.csv "
+                  f"to {out}")  # fmt: skip

@@ -1,0 +1,120 @@
+"""Interventions compared: supports scaled over a range, and the maintenance each
+alternative needs over the horizon with its cost.
+
+A support stiffness scaled by ``factor`` over a distance range divides every deflection of
+each load-deflection curve in the range by ``factor`` at the same loads (a linear support's
+stiffness is multiplied by it): the secant stiffness at every load, and a void (the
+deflection before the sleeper bears), scale by the same factor.
+
+The costs are undiscounted sums over the horizon, in the user's currency: tamping and
+renewal per metre of segment treated, and the intervention's own cost.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from trackdyn.errors import TrackdynInputError
+from trackdyn.io import column, read_table
+
+
+@dataclass(frozen=True)
+class Scale:
+    """Support stiffness times ``factor`` [-] from ``from_m`` to ``to_m`` [m]."""
+
+    from_m: float
+    to_m: float
+    factor: float
+
+
+def support_extent(path) -> tuple[float, float]:
+    """First and last sleeper position of a supports CSV [m]."""
+    distance, _ = column(read_table(path, ("rail",)), "distance", "length", path)
+    return float(distance.min()), float(distance.max())
+
+
+def scale_supports(source, target, scales) -> None:
+    """Write the supports CSV ``source`` to ``target`` with the stiffness scaled.
+
+    Rows whose distance lies in a range (ends included) have their ``deflection_<unit>``
+    divided, or their ``stiffness_<unit>`` multiplied, by the range's factor; ranges that
+    overlap multiply.
+
+    Parameters
+    ----------
+    source, target : path
+        Supports CSV read, and the one written.
+    scales : sequence of Scale
+        The ranges and factors.
+    """
+    frame = read_table(source, ("rail",))
+    distance, _ = column(frame, "distance", "length", source)
+    factor = np.ones(distance.size)
+    for s in scales:
+        factor[(distance >= s.from_m) & (distance <= s.to_m)] *= s.factor
+    value = [c for c in frame.columns if c.startswith(("deflection_", "stiffness_"))]
+    if len(value) != 1:
+        raise TrackdynInputError(f"{source}: no deflection_<unit> or stiffness_<unit> column")
+    name = value[0]
+    numbers = frame[name].astype(float).to_numpy()
+    frame[name] = numbers / factor if name.startswith("deflection_") else numbers * factor
+    frame.to_csv(Path(target), index=False, float_format="%.9g")
+
+
+def maintenance_totals(datasets) -> dict:
+    """Maintenance of one alternative over the horizon, summed over its sections.
+
+    Parameters
+    ----------
+    datasets : list of xarray.Dataset
+        Results of `trackdyn.deterioration.predict` (one per section), with maintenance.
+
+    Returns
+    -------
+    dict
+        ``tampings``, ``renewals`` [-]; ``tamped_m`` and ``renewed_m``, the segment length
+        treated [m]; ``mean_interval_mgt``, the mean tonnage between two interventions of
+        a segment [MGT] (NaN without two on one segment); ``tamped_m_per_100_mgt``, the
+        length tamped or renewed per 100 MGT [m].
+    """
+    out = dict.fromkeys(("tampings", "renewals", "tamped_m", "renewed_m"), 0.0)
+    intervals, per_100 = [], 0.0
+    for ds in datasets:
+        seg = ds.intervention_segment.values
+        length = (ds.segment_end - ds.segment_start).values[seg]
+        kind = ds.intervention_kind.values.astype(str)
+        for name, metres, which in (("tampings", "tamped_m", "tamping"),
+                                    ("renewals", "renewed_m", "renewal")):  # fmt: skip
+            out[name] += int(np.sum(kind == which))
+            out[metres] += float(length[kind == which].sum())
+        for j in np.unique(seg):
+            intervals.extend(np.diff(np.sort(ds.intervention_mgt.values[seg == j])))
+        per_100 += float(length.sum()) / float(ds.mgt[-1]) * 100.0
+    out["mean_interval_mgt"] = float(np.mean(intervals)) if intervals else np.nan
+    out["tamped_m_per_100_mgt"] = per_100
+    return out
+
+
+def costs(totals: dict, tamping_per_m: float, renewal_per_m: float, intervention: float) -> dict:
+    """Costs of one alternative over the horizon (undiscounted, the user's currency).
+
+    Parameters
+    ----------
+    totals : dict
+        `maintenance_totals` of the alternative.
+    tamping_per_m, renewal_per_m : float
+        Cost of tamping and of renewing one metre of track.
+    intervention : float
+        Cost of the intervention itself.
+    """
+    tamping = tamping_per_m * totals["tamped_m"]
+    renewal = renewal_per_m * totals["renewed_m"]
+    return {
+        "tamping_cost": tamping,
+        "renewal_cost": renewal,
+        "intervention_cost": intervention,
+        "life_cycle_cost": tamping + renewal + intervention,
+    }

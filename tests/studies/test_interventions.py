@@ -1,0 +1,231 @@
+"""Interventions study: a soft-spot fix, an alternative without changes, costs, bad input."""
+
+import dataclasses
+
+import numpy as np
+import pandas as pd
+import pytest
+import xarray as xr
+from typer.testing import CliRunner
+
+from trackdyn.cli import app
+from trackdyn.commands.deteriorate.scenario import load_deterioration
+from trackdyn.commands.deteriorate.sections import section_tasks
+from trackdyn.commands.interventions import (
+    InterventionsStudy,
+    alternative_tasks,
+    run_alternatives,
+)
+from trackdyn.deterioration.runs import run_sections
+from trackdyn.errors import TrackdynInputError
+from trackdyn.io import read_supports, write_geometry, write_supports
+from trackdyn.options import load_toml
+from trackdyn.studies.interventions import Scale, costs, scale_supports
+from trackdyn.track.synthetic import SoftSpot, synthetic_track
+
+runner = CliRunner()
+
+SPOT = SoftSpot(centre=30.0, length=6.0, factor=0.45, gap=1.5e-3)
+"""The soft spot: full from 27 to 33 m, cosine taper to 21 and 39 m (`SoftSpot.weight`)."""
+
+SCENARIO = """
+[run]
+model = "4dof"
+[[traffic]]
+vehicle = "loaded"
+speed_kmh = 60
+passages_per_mgt = 8065
+[settlement]
+law = "sato"
+rate_cov = 0.0                  # uniform ballast: only the soft spot makes it uneven
+[loop]
+total_mgt = 8
+snapshot_every_mgt = 4
+segment_length_m = 60           # two segments: 0.5-60.5 m (the soft spot), 60.5-119.5 m
+threshold_sd_mm = 0.12          # reached by the soft spot's segment in a few MGT
+[maintenance]
+min_interval_mgt = 1
+recovery_offset_mm = 0.05       # below the threshold, so a tamping brings the segment back
+[track]
+geometry = "geometry.csv"
+supports = "supports.csv"
+"""
+
+STUDY = """
+kind = "interventions"
+scenario = "scenario.toml"
+[costs]
+tamping_per_m = 10.0
+renewal_per_m = 100.0
+[[alternative]]
+name = "base"
+[[alternative]]
+name = "spot-fixed"
+cost = 1000.0
+supports_scale = [{ from_m = 21, to_m = 39, factor = 2.2222222222 }]   # 1 / 0.45
+"""
+
+
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory):
+    """A 120 m level section with a soft spot at 30 m, a scenario and a study."""
+    path = tmp_path_factory.mktemp("interventions")
+    trk = synthetic_track(120.0, spectrum=None, stiffness_cov=0.0, seed=1, features=(SPOT,))
+    write_geometry(trk.geometry, path / "geometry.csv")
+    write_supports(trk.supports, path / "supports.csv")
+    (path / "scenario.toml").write_text(SCENARIO)
+    (path / "study.toml").write_text(STUDY)
+    return path
+
+
+@pytest.fixture(scope="module")
+def compared(folder, tmp_path_factory):
+    """The study run through the CLI, serially: its output folder."""
+    out = tmp_path_factory.mktemp("out") / "out"
+    args = ["study", str(folder / "study.toml"), "--out", str(out), "--workers", "1"]
+    result = runner.invoke(app, args)
+    assert result.exit_code == 0, result.output
+    return out
+
+
+def test_scaled_supports_divide_the_deflections_in_the_range_only(folder, tmp_path):
+    scale_supports(folder / "supports.csv", tmp_path / "s.csv", [Scale(21.0, 39.0, 2.0)])
+    before, after = read_supports(folder / "supports.csv"), read_supports(tmp_path / "s.csv")
+    inside = (before.position >= 21.0) & (before.position <= 39.0)
+    for rail in ("left", "right"):
+        b, a = getattr(before, rail), getattr(after, rail)
+        for i in range(len(b)):
+            np.testing.assert_allclose(a[i].load, b[i].load)
+            expected = b[i].deflection / (2.0 if inside[i] else 1.0)  # the scaling's definition
+            np.testing.assert_allclose(a[i].deflection, expected, rtol=1e-8)
+
+
+def test_fixing_the_soft_spot_delays_and_does_not_add_tampings(compared):
+    segments = pd.read_csv(compared / "interventions_segments.csv")
+    spot = segments[segments["segment_start_m"] < 30.0].set_index("alternative")
+    assert spot.loc["base", "interventions"] >= 1  # the soft spot triggers within 8 MGT
+    assert spot.loc["spot-fixed", "interventions"] <= spot.loc["base", "interventions"]
+    first = spot["first_mgt"].fillna(np.inf)  # NaN: never tamped within the horizon
+    assert first["spot-fixed"] > first["base"]
+
+
+def test_costs_add_up(compared):
+    table = pd.read_csv(compared / "interventions_compared.csv").set_index("alternative")
+    for name, row in table.iterrows():
+        # every segment is 60 m long (segment_length_m) and costs 10 per m tamped, 100 renewed
+        assert row["tamped_m"] == pytest.approx(60.0 * row["tampings"])
+        assert row["tamping_cost"] == pytest.approx(10.0 * 60.0 * row["tampings"])
+        assert row["renewal_cost"] == pytest.approx(100.0 * 60.0 * row["renewals"])
+        assert row["intervention_cost"] == {"base": 0.0, "spot-fixed": 1000.0}[name]
+        parts = row["tamping_cost"] + row["renewal_cost"] + row["intervention_cost"]
+        assert row["life_cycle_cost"] == pytest.approx(parts)
+    assert {"interventions_compared.nc", "interventions_compared.png"} <= {
+        p.name for p in compared.iterdir()
+    }
+    assert xr.open_dataset(compared / "interventions_compared.nc").sizes["alternative"] == 2
+
+
+def test_costs_in_closed_form():
+    totals = {"tamped_m": 120.0, "renewed_m": 60.0}
+    got = costs(totals, tamping_per_m=10.0, renewal_per_m=100.0, intervention=1000.0)
+    # 10 × 120 = 1200, 100 × 60 = 6000, 1200 + 6000 + 1000 = 8200
+    assert got == {"tamping_cost": 1200.0, "renewal_cost": 6000.0,
+                   "intervention_cost": 1000.0, "life_cycle_cost": 8200.0}  # fmt: skip
+
+
+def test_an_alternative_without_changes_is_the_scenario_itself(folder, tmp_path):
+    study, _ = load_toml(InterventionsStudy, folder / "study.toml")
+    labelled, _ = alternative_tasks(study, folder / "study.toml", tmp_path)
+    alone = [(name, t) for name, t in labelled if name == "base"]
+    spec, base = load_deterioration(folder / "scenario.toml")
+    got = run_alternatives(alone, workers=1)[0]
+    expected = run_sections(section_tasks(spec, base), workers=1)[0]
+    for ds in (got, expected):  # the run's timings differ from run to run
+        ds.attrs = {k: v for k, v in ds.attrs.items() if not k.startswith("time_")}
+    xr.testing.assert_identical(got, expected)
+
+
+def test_a_failed_run_names_its_section_and_alternative(folder, tmp_path):
+    study, _ = load_toml(InterventionsStudy, folder / "study.toml")
+    labelled, _ = alternative_tasks(study, folder / "study.toml", tmp_path)
+    name, task = labelled[1]
+    gone = dataclasses.replace(task.section, supports=str(tmp_path / "gone.csv"))
+    with pytest.raises(TrackdynInputError, match="section geometry of alternative 'spot-fixed': "):
+        run_alternatives([(name, dataclasses.replace(task, section=gone))], workers=1)
+
+
+BAD = {
+    "unknown alternative key": (
+        'name = "x"\ncolour = "red"', "study.toml: unknown key 'alternative.0.colour'"),
+    "negative factor": (
+        'name = "x"\nsupports_scale = [{ from_m = 21, to_m = 39, factor = -2 }]',
+        "study.toml: alternative.0.supports_scale.0.factor: Input should be greater than 0"),
+    "range outside the track": (
+        'name = "x"\nsupports_scale = [{ from_m = 100, to_m = 150, factor = 2 }]',
+        "study.toml: alternative 'x': supports_scale 100-150 m is outside section "
+        "geometry's supports"),
+    "unknown section": (
+        'name = "x"\nsupports_scale = [{ from_m = 1, to_m = 5, factor = 2, section = "km9" }]',
+        "study.toml: alternative 'x': supports_scale: no section 'km9'"),
+    "a wedge that locks": (  # mu = 0.8 locks the wedge (above tan 36.3 deg = 0.73)
+        'name = "x"\nvehicle_overrides = { mu = 0.8 }',
+        "study.toml: alternative 'x': traffic 1: vehicle parameter mu = 0.8 locks the wedge"),
+    "unknown law parameter": (
+        'name = "x"\nsettlement_overrides = { nonsense = 1.0 }',
+        "study.toml: alternative 'x': unknown settlement parameter of the sato law 'nonsense'"),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("case", BAD)
+def test_bad_input_is_refused_in_one_line_naming_file_and_key(folder, tmp_path, case):
+    table, message = BAD[case]
+    study = f'kind = "interventions"\nscenario = "{folder / "scenario.toml"}"\n'
+    (tmp_path / "study.toml").write_text(f"{study}[[alternative]]\n{table}\n")
+    out = tmp_path / "out"
+    result = runner.invoke(app, ["study", str(tmp_path / "study.toml"), "--out", str(out)])
+    assert result.exit_code == 2, result.output
+    line = " ".join(result.output.split())
+    assert message in line
+    assert not out.exists()
+
+
+def test_the_shipped_example_expands_to_its_alternatives(tmp_path):
+    to = tmp_path / "ex"
+    assert runner.invoke(app, ["example", "interventions", "--to", str(to)]).exit_code == 0
+    study, _ = load_toml(InterventionsStudy, to / "interventions.toml")
+    labelled, _ = alternative_tasks(study, to / "interventions.toml", tmp_path)
+    assert [name for name, _ in labelled] == [a.name for a in study.alternative]  # 1 section
+    # only soft-spot-fixed scales supports; a section of files is named after its geometry
+    assert [p.name for p in tmp_path.glob("*.csv")] == ["soft-spot-fixed_geometry_supports.csv"]
+
+
+@pytest.mark.slow
+def test_fixing_the_example_soft_spot_lengthens_its_segment_interval(tmp_path):
+    """The issue's check on the built-in example: its soft spot (300 m) lies in the
+    200.5-400.5 m segment; 50 MGT of the example traffic, the 4-DOF model (~1 min)."""
+    to = tmp_path / "ex"
+    assert runner.invoke(app, ["example", "interventions", "--to", str(to)]).exit_code == 0
+    text = (to / "interventions.toml").read_text()
+    (to / "two.toml").write_text(text[: text.index('[[alternative]]\nname = "high')])
+    out = tmp_path / "out"
+    args = ["study", str(to / "two.toml"), "--out", str(out), "--workers", "2"]
+    assert runner.invoke(app, args).exit_code == 0
+    segments = pd.read_csv(out / "interventions_segments.csv")
+    spot = segments[segments["segment_start_m"] == 200.5].set_index("alternative")
+    assert spot.loc["soft-spot-fixed", "interventions"] < spot.loc["base", "interventions"]
+    interval = spot["mean_interval_mgt"]
+    assert interval["soft-spot-fixed"] > interval["base"]
+
+
+def test_a_scenario_without_maintenance_is_refused(folder, tmp_path):
+    text = SCENARIO.replace("[maintenance]\nmin_interval_mgt = 1\n", "")
+    (tmp_path / "plain.toml").write_text(text.replace("recovery_offset_mm = 0.05", ""))
+    for name in ("geometry.csv", "supports.csv"):
+        (tmp_path / name).write_bytes((folder / name).read_bytes())
+    study = STUDY.replace('scenario = "scenario.toml"', 'scenario = "plain.toml"')
+    (tmp_path / "study.toml").write_text(study)
+    out = tmp_path / "out"
+    result = runner.invoke(app, ["study", str(tmp_path / "study.toml"), "--out", str(out)])
+    assert result.exit_code == 2
+    assert "plain.toml: no [maintenance] table: nothing to compare" in result.output
+    assert not out.exists()
