@@ -19,10 +19,9 @@ Two step sizes. A step (a vehicle run) is as long as ``max_step_settlement`` all
 the loads of the step start, the increment is known in closed form for any ``ΔM``, so the
 step is the largest one whose change of the track's shape stays within the limit at
 every sleeper (found by root finding). The shape is what the vehicle feels: the
-increment in the D1 band, its moving mean over `SHORTEST_WAVELENGTH` less that over
-`SHAPE_WAVELENGTH` (a track that settles evenly over a wavelength longer than the D1
-band's loads the wheels as before, and the rail bridges the sleeper-to-sleeper part,
-which the rail beam's load updates within the step follow). The step is cut to land on the
+increment less its moving mean over `SHAPE_WAVELENGTH` (a track that settles evenly over
+a wavelength longer than the D1 band's loads the wheels as before; the rail beam still
+redistributes the rail-seat loads within the step). The step is cut to land on the
 snapshot tonnages and on ``total_mgt``; the first, and the first after each tamping, is
 at least one train (``min_step_passages`` passages of the traffic mix): the law's first
 cycles settle fast, and a step shorter than a train would follow them with vehicle runs
@@ -115,9 +114,9 @@ class LoopOptions(Strict):
     total_mgt : float
         Traffic to predict over [MGT].
     max_step_settlement : float
-        Largest change of the settlement's shape (`shape_change`) of any sleeper in one
-        step [m]; a sleeper's stable step (`stable_settlement`) may keep the load updates
-        within it shorter.
+        Largest change of the settlement's shape (less its moving mean over
+        `SHAPE_WAVELENGTH`) of any sleeper in one step [m]; a sleeper's stable step
+        (`stable_settlement`) may keep the load updates within it shorter.
     snapshot_every_mgt : float
         Tonnage between stored geometry snapshots [MGT].
     threshold_sd_mm : float
@@ -220,22 +219,12 @@ longest wavelength of the D1 band (EN 13848-1), which sets the dynamic wheel loa
 
 
 def shape_change(increment, position) -> np.ndarray:
-    """The settlement increment (rail, sleeper) [m] in the D1 band, roughly: its moving
-    mean over `SHORTEST_WAVELENGTH` less that over `SHAPE_WAVELENGTH`, in absolute value
-    [m]."""
+    """The settlement increment (rail, sleeper) [m] less its moving mean over
+    `SHAPE_WAVELENGTH`, in absolute value [m]."""
     spacing = float(np.median(np.diff(position)))
+    size = max(1, int(round(SHAPE_WAVELENGTH / spacing)) | 1)
+    return np.abs(increment - uniform_filter1d(increment, size, axis=-1, mode="nearest"))
 
-    def mean(length):
-        size = max(1, int(round(length / spacing)) | 1)
-        return uniform_filter1d(increment, size, axis=-1, mode="nearest")
-
-    return np.abs(mean(SHORTEST_WAVELENGTH) - mean(SHAPE_WAVELENGTH))
-
-
-SHORTEST_WAVELENGTH = 3.0
-"""Length of the moving mean that takes the sleeper-to-sleeper part off a step's
-settlement before the step limit [m]: the shortest wavelength of the D1 band; the rail
-bridges shorter unevenness, and the rail beam's load updates within the step follow it."""
 
 RUNAWAY_STEPS = 10
 """Steps in a row, each shorter than one passage of the traffic, after which the loop
