@@ -100,6 +100,18 @@ def test_scaled_supports_divide_the_deflections_in_the_range_only(folder, tmp_pa
             np.testing.assert_allclose(a[i].deflection, expected, rtol=1e-8)
 
 
+def test_a_ramp_runs_the_factor_linearly_over_its_range(folder, tmp_path):
+    """A transition treatment: stiffness rising linearly from 1 at 21 m to 3 at 39 m
+    (``ramp = "up"``), so each deflection is divided by ``1 + 2 (x - 21) / 18``."""
+    scale_supports(folder / "supports.csv", tmp_path / "s.csv", [Scale(21.0, 39.0, 3.0, "up")])
+    before, after = read_supports(folder / "supports.csv"), read_supports(tmp_path / "s.csv")
+    x = before.position
+    factor = np.where((x >= 21.0) & (x <= 39.0), 1.0 + 2.0 * (x - 21.0) / 18.0, 1.0)
+    for i in range(len(before.left)):
+        np.testing.assert_allclose(after.left[i].deflection, before.left[i].deflection / factor[i],
+                                   rtol=1e-8)  # fmt: skip
+
+
 def test_fixing_the_soft_spot_delays_and_does_not_add_tampings(compared):
     segments = pd.read_csv(compared / "interventions_segments.csv")
     spot = segments[segments["segment_start_m"] < 30.0].set_index("alternative")

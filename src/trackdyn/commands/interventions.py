@@ -58,12 +58,15 @@ from trackdyn.studies.interventions import (
 
 class SupportsScale(Strict):
     """One range of ``supports_scale``: stiffness times ``factor`` [-] from ``from_m`` to
-    ``to_m`` [m] of ``section`` (default: every section)."""
+    ``to_m`` [m] of ``section`` (default: every section); ``ramp`` ``"up"`` or ``"down"``
+    runs the factor linearly from 1 (a transition treatment), ``"none"`` (default) holds it
+    over the range (`trackdyn.studies.interventions.RAMPS`)."""
 
     from_m: float
     to_m: float
     factor: PositiveFloat
     section: str | None = None
+    ramp: Literal["none", "up", "down"] = "none"
 
     @model_validator(mode="after")
     def _ordered(self):
@@ -135,7 +138,7 @@ def _scaled_section(sec: Section, alt: Alternative, folder: Path) -> Section:
                 f"{sec.name}'s supports ({first:g}-{last:g} m)"
             )
     target = folder / f"{alt.name}_{sec.name}_supports.csv"
-    scale_supports(source, target, [Scale(s.from_m, s.to_m, s.factor) for s in mine])
+    scale_supports(source, target, [Scale(s.from_m, s.to_m, s.factor, s.ramp) for s in mine])
     geometry = sec.geometry or str(example_path(EXAMPLE_GEOMETRY))
     return dataclasses.replace(sec, geometry=geometry, supports=str(target))
 

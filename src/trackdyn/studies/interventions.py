@@ -20,14 +20,29 @@ import numpy as np
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import column, read_table
 
+RAMPS = ("none", "up", "down")
+"""How a scale runs over its range: all of it (``none``), or linearly from 1 at ``from_m``
+to the factor at ``to_m`` (``up``: a transition treatment towards a stiff structure
+beyond ``to_m``) or from the factor at ``from_m`` to 1 at ``to_m`` (``down``)."""
+
 
 @dataclass(frozen=True)
 class Scale:
-    """Support stiffness times ``factor`` [-] from ``from_m`` to ``to_m`` [m]."""
+    """Support stiffness times ``factor`` [-] from ``from_m`` to ``to_m`` [m], run over the
+    range as ``ramp`` says (`RAMPS`)."""
 
     from_m: float
     to_m: float
     factor: float
+    ramp: str = "none"
+
+    def at(self, distance) -> np.ndarray:
+        """The factor at each ``distance`` [m] (1 outside the range) [-]."""
+        x = np.asarray(distance, dtype=float)
+        inside = (x >= self.from_m) & (x <= self.to_m)
+        along = (x - self.from_m) / (self.to_m - self.from_m)
+        share = {"none": np.ones_like(x), "up": along, "down": 1.0 - along}[self.ramp]
+        return np.where(inside, 1.0 + (self.factor - 1.0) * share, 1.0)
 
 
 def support_extent(path) -> tuple[float, float]:
@@ -40,8 +55,8 @@ def scale_supports(source, target, scales) -> None:
     """Write the supports CSV ``source`` to ``target`` with the stiffness scaled.
 
     Rows whose distance lies in a range (ends included) have their ``deflection_<unit>``
-    divided, or their ``stiffness_<unit>`` multiplied, by the range's factor; ranges that
-    overlap multiply.
+    divided, or their ``stiffness_<unit>`` multiplied, by the range's factor there
+    (`Scale.at`); ranges that overlap multiply.
 
     Parameters
     ----------
@@ -54,7 +69,7 @@ def scale_supports(source, target, scales) -> None:
     distance, _ = column(frame, "distance", "length", source)
     factor = np.ones(distance.size)
     for s in scales:
-        factor[(distance >= s.from_m) & (distance <= s.to_m)] *= s.factor
+        factor *= s.at(distance)
     value = [c for c in frame.columns if c.startswith(("deflection_", "stiffness_"))]
     if len(value) != 1:
         raise TrackdynInputError(f"{source}: no deflection_<unit> or stiffness_<unit> column")
