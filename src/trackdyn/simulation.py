@@ -88,7 +88,7 @@ def _problem(vehicle, track, o: RunOptions) -> Problem:
             f"{front - rear:.2f} m"
         )
     default_dt, limit, omega = time_step(m, lin, speed)
-    inputs = ContactInput(m, lin, o.nonlinear)
+    inputs: ContactInput | DiscreteTrack = ContactInput(m, lin, o.nonlinear)
     if o.track == "discrete":
         inputs = given or discrete_track(lin)
         stable = discrete.stable_step(inputs, m.static_wheel_load)
@@ -256,6 +256,7 @@ def _dataset(run: Run, vehicle, o: RunOptions) -> xr.Dataset:
     ds = make_dataset(p.model, vehicle, run.time, run.centre, run.out, **flags)
     ds.attrs["track_model"] = o.track
     if o.track == "discrete":
+        assert isinstance(p.inputs, DiscreteTrack)
         ds = ds.assign_coords(
             rail=list(RAILS), sleeper_position=("sleeper", p.inputs.lin.track.supports.position)
         )
@@ -315,8 +316,9 @@ def simulate(
     o = RunOptions() if options is None else options
     if isinstance(vehicle, list | tuple):
         raise TrackdynInputError("simulate: vehicle must be one Vehicle; for many, simulate_batch")
-    flags = dict(progress=progress, newton_max_iter=newton_max_iter)
-    (result,) = simulate_batch([vehicle], [track], [o], **flags)
+    (result,) = simulate_batch(
+        [vehicle], [track], [o], progress=progress, newton_max_iter=newton_max_iter
+    )
     if isinstance(result, Exception):
         raise result
     return result

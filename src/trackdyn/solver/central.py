@@ -46,6 +46,7 @@ from trackdyn.solver.statics import (
     non_finite,
     start_path,
     table_step,
+    track_input,
     wedge_forces,
     wedge_table,
     widths,
@@ -353,7 +354,7 @@ def step_matrices(model, dt) -> StepMatrices:
         jinv[mask] = np.linalg.inv(np.eye(nw) + H * (c_slope * stick)[None, :])
     sparse = [_sparse_rows(x) for x in (P, (Ainv @ Dc.T).T, Gw.T, Dc, Dw, model.Ds)]
     pairs = (a for pair in sparse for a in pair)
-    return StepMatrices(*pairs, H, jinv, wedge, contact_table(model))
+    return StepMatrices._make([*pairs, H, jinv, wedge, contact_table(model)])
 
 
 def _stack(arrays):
@@ -398,10 +399,10 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> 
     rows = np.cumsum([0] + [p.n_store for p in problems])
     flat = {name: np.empty((rows[-1], w)) for name, w in widths(problems[0].model).items()}
     every = np.array([p.store_every for p in problems])
-    y_start, y_step = np.array([table_step(p.inputs.grid) for p in problems]).T
+    y_start, y_step = np.array([table_step(track_input(p).grid) for p in problems]).T
     static = np.array([p.model.static_wheel_load for p in problems])
     dts = np.array([p.dt for p in problems])
-    step_bytes = 8 * len(problems[0].model.contact_names) * (2 + problems[0].inputs.grid.size)
+    step_bytes = 8 * len(problems[0].model.contact_names) * (2 + track_input(problems[0]).grid.size)
     block = max(1, min(CHUNK_STEPS, CHUNK_BYTES // step_bytes // len(problems)))
     firsts = range(0, max(p.n_steps for p in problems), block)
 
@@ -430,9 +431,11 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> 
                 *stacked, static, k, r, table, y_start, y_step, in_start,
                 z, dts, np.full(len(problems), first), every,
                 newton_max_iter, rows[:-1] + (first + every - 1) // every,
-                *flat.values(), status,
+                *[*flat.values(), status],
             )  # fmt: skip
-            for b in np.flatnonzero((status[:, 0] != DONE) & (status[:, 0] != NOT_STARTED)):
+            for b in np.flatnonzero(
+                (status[:, 0] != DONE) & (status[:, 0] != NOT_STARTED)
+            ).tolist():
                 if errors[b] is None:
                     stop = failure if status[b, 0] == NEWTON_FAILED else non_finite
                     errors[b] = stop(problems[b], first + int(status[b, 1]))

@@ -369,7 +369,9 @@ def first_window(p, track, off) -> tuple[int, int]:
     return int(np.clip(lo, 0, x.size - width - 1)), width
 
 
-def solve(p, newton_max_iter: int = 50, advanced=None) -> dict:
+def solve(
+    p, newton_max_iter: int = 50, advanced=None
+) -> dict[str, np.ndarray] | TrackdynInputError:
     """Integrate one run on the discrete track (``p.inputs`` a `DiscreteTrack`).
 
     Returns
@@ -393,7 +395,7 @@ def solve(p, newton_max_iter: int = 50, advanced=None) -> dict:
     x = track.position
     L = np.diff(x)
     EI = track.EI
-    coeff = [12 * EI / L**3, 6 * EI / L**2, 4 * EI / L, 2 * EI / L]
+    coeff = (12 * EI / L**3, 6 * EI / L**2, 4 * EI / L, 2 * EI / L)
     trib = track.spacing
     per_contact = np.array([float(len(a)) for a in model.contact_axles])
     hertz = hertz_stiffness(model.static_wheel_load, prm.wheel_radius)
@@ -429,7 +431,7 @@ def solve(p, newton_max_iter: int = 50, advanced=None) -> dict:
             prm.pad_stiffness, prm.pad_damping, track.kb, prm.ballast_damping, sgap,
             track.rest[0], track.rest[1], GRAVITY, state, window, prm.margin, ax_el, rail_axles, z,
             centre, r_in, k_in, p.dt, first, p.store_every, newton_max_iter,
-            *(a[row:] for a in out.values()), peak,
+            *[*(a[row:] for a in out.values()), peak],
         )  # fmt: skip
         if status != DONE:
             stop = failure if status == NEWTON_FAILED else non_finite

@@ -35,6 +35,7 @@ from trackdyn.solver.statics import (
     non_finite,
     start_path,
     table_step,
+    track_input,
     wedge_forces,
     wedge_table,
     wheel_load,
@@ -53,7 +54,7 @@ class _Equations:
         self.p, m = p, p.model
         self.Minv = np.linalg.inv(m.M)
         self.wedge = wedge_table(m)
-        self.y0, self.dy = table_step(p.inputs.grid)
+        self.y0, self.dy = table_step(track_input(p).grid)
 
     def forces(self, t, q, v):
         """Contact forces [N], wedge forces [N], stiffness [N/m] and input [m] at ``t``."""

@@ -19,6 +19,9 @@ import numpy as np
 from numba import njit
 
 from trackdyn.errors import TrackdynInputError
+from trackdyn.track.discrete import DiscreteTrack
+from trackdyn.track.inputs import TrackInput
+from trackdyn.vehicle.assembly import Model
 
 OUTPUTS = ("q", "v", "a", "wl", "secondary", "fw", "vw", "k", "r")
 """Stored arrays, (stored steps, width): displacement [m], velocity [m/s], acceleration
@@ -36,8 +39,9 @@ class Problem:
     ----------
     model : Model
         Vehicle model (`trackdyn.vehicle.assembly.Model`).
-    inputs : TrackInput
-        Track under the contacts (`trackdyn.track.inputs.TrackInput`).
+    inputs : TrackInput or DiscreteTrack
+        Track under the contacts (`trackdyn.track.inputs.TrackInput`), or the discrete
+        track itself for `trackdyn.solver.discrete` (`trackdyn.track.discrete.DiscreteTrack`).
     centre0 : float
         Vehicle-centre position at t = 0 [m].
     speed : float
@@ -51,8 +55,8 @@ class Problem:
         Every n-th step is stored.
     """
 
-    model: object
-    inputs: object
+    model: Model
+    inputs: TrackInput | DiscreteTrack
     centre0: float
     speed: float
     dt: float
@@ -63,6 +67,12 @@ class Problem:
     def n_store(self) -> int:
         """Stored steps."""
         return (self.n_steps - 1) // self.store_every + 1
+
+
+def track_input(p: Problem) -> TrackInput:
+    """``p.inputs`` of a run on the continuous track (the central and reference solvers)."""
+    assert not isinstance(p.inputs, DiscreteTrack), "a discrete-track run is solver.discrete's"
+    return p.inputs
 
 
 def widths(model) -> dict[str, int]:
