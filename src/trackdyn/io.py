@@ -200,7 +200,7 @@ class SupportRows:
 
     distance: np.ndarray
     rail: np.ndarray
-    values: tuple
+    values: tuple[np.ndarray, ...]
     line: np.ndarray
 
     def take(self, rows) -> SupportRows:
@@ -253,6 +253,7 @@ def _support_rows(frame: pd.DataFrame, path) -> SupportRows:
         raise TrackdynInputError(
             f"{path}: line {line[bad[0]]}: rail {frame['rail'].iloc[bad[0]]!r} is not left or right"
         )
+    values: tuple[np.ndarray, ...]
     if any(str(c).startswith("stiffness_") for c in frame.columns):
         values = (column(frame, "stiffness", "stiffness", path)[0],)
     else:
@@ -290,7 +291,8 @@ def rail_curves(rows: SupportRows, rail: str, path) -> tuple[np.ndarray, Curves]
     where = functools.partial(_curve_where, f"{path}: {rail} rail", positions, *lines)
     if len(rows.values) == 1:
         return positions, _linear_curves(rows.values[0], start, where)
-    return positions, _measured_curves(*rows.values, start, rows.line, where)
+    load, deflection = rows.values
+    return positions, _measured_curves(load, deflection, start, rows.line, where)
 
 
 def _curve_where(source: str, position, first, last, i: int) -> str:

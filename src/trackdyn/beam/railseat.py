@@ -166,9 +166,9 @@ class Windows:
         self.T = np.linalg.solve(Ktt, K[:, t][:, :, w]).transpose(0, 2, 1)  # Kwt Ktt^-1
         self.S = K[:, w][:, :, w] - self.T @ K[:, t][:, :, w]  # condensed stiffness
         self.index = np.arange(n)[:, None] + np.arange(self.width)[None, :] + 1  # padded
-        self._rest = None  # the rest state the inverses below belong to
-        self._closed = None  # its closed supports per window
-        self._inverse = None
+        self._rest: RailRest | None = None  # the rest state the inverses below belong to
+        self._closed: np.ndarray | None = None  # its closed supports per window
+        self._inverse = np.empty((0, self.width, self.width))  # sized at the first rest state
 
     def load_vector(self, centre, position, load):
         """Condensed nodal forces of point loads, (B, W) [N].
@@ -199,7 +199,7 @@ class Windows:
         return tuple(b.padded(v)[index] for v in (b.stiffness, rest.gap, rest.deflection,
                                                    rest.force))  # fmt: skip
 
-    def _inverses(self, rest: RailRest):
+    def _inverses(self, rest: RailRest) -> np.ndarray:
         """Inverse window matrices with the rest state's closed supports, (n, W, W) [m/N].
 
         Formed for the windows whose closed supports differ from those of the last rest

@@ -127,7 +127,7 @@ def align(reference: Geometry, survey: Geometry, max_shift: float, around: float
     first = int(np.ceil((a0 - b0 - around - max_shift) / spacing))
     last = int(np.floor((a0 - b0 - around + max_shift) / spacing))
     lags, corr = np.arange(first, last + 1), []
-    for lag in lags:
+    for lag in lags.tolist():
         i0, i1 = max(0, -lag), min(a.shape[1], b.shape[1] - lag)
         if i1 - i0 < least:
             corr.append(-np.inf)

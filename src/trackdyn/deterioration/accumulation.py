@@ -24,6 +24,8 @@ term, of the cycles reaching each load cell of the Varandas histogram.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from trackdyn.deterioration.settlement import VarandasLaw, harmonic
@@ -49,7 +51,9 @@ class Hardening:
         self.law, self.vehicles = law, vehicles
         self.N = np.zeros(shape)
         self.states = [term.start(shape) for term in law.terms]
-        self._parts, self._owners, self._cycles = [], [], np.zeros(shape)
+        self._parts: list[tuple] = []  # per term: (increment, shares) of `prepare`
+        self._owners: list[int] = []
+        self._cycles = np.zeros(shape)
 
     def _classes(self, cycles):
         """Per wheel: (cycles per MGT, load factor) per rail and sleeper; owners; per MGT."""
@@ -118,8 +122,8 @@ class LoadHistory(Hardening):
         self.law, self.vehicles = law, vehicles
         self.N = np.zeros(shape)
         self.h = np.zeros((*shape, 0))
-        self._rate, self._by_vehicle, self._cycles = self.h, [], np.zeros(shape)
-        self._increment = None
+        self._rate, self._cycles = self.h, np.zeros(shape)
+        self._increment: Callable[[float], np.ndarray] | None = None
 
     def prepare(self, cycles):
         law, shape = self.law, self.N.shape
@@ -153,6 +157,7 @@ class LoadHistory(Hardening):
         return lambda dm: to_seats(each(dm))
 
     def advance(self, dm: float) -> np.ndarray:
+        assert self._increment is not None, "prepare comes first"
         split = self._increment(dm)
         self.N = self.N + self._cycles * dm
         self.h = self.h + self._rate * dm

@@ -54,6 +54,7 @@ def quality_table(
             per_rail.append(table["sd_mm"].to_numpy())
             segments = table
         values.append(per_rail)
+    assert segments is not None, "no profiles"
     return xr.DataArray(
         np.array(values),
         dims=("band", "rail", "segment"),

@@ -197,7 +197,8 @@ class Curves(Sequence):
     def __len__(self) -> int:
         return self.start.size - 1
 
-    def __getitem__(self, i) -> SupportCurve:
+    # integer indices only (a slice raises TypeError), narrower than Sequence's
+    def __getitem__(self, i: int) -> SupportCurve:  # type: ignore[override]
         i = range(len(self))[operator.index(i)]
         part = slice(self.start[i], self.start[i + 1])
         return SupportCurve(self.load[part].copy(), self.deflection[part].copy(), self.where(i))

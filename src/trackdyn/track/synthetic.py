@@ -21,7 +21,7 @@ import numpy as np
 
 from trackdyn.errors import TrackdynInputError, shown
 from trackdyn.track.spectra import generate_profile
-from trackdyn.track.support import SupportCurve
+from trackdyn.track.support import Curves, SupportCurve
 from trackdyn.track.track import Geometry, Supports, Track
 
 SEATING_LOAD = 32.5e3
@@ -211,7 +211,7 @@ def synthetic_track(
             raise TrackdynInputError(f"unknown track feature {feature!r}")
     p0 = SEATING_LOAD / 3
     curves = [
-        tuple(
+        Curves.of(
             SupportCurve(
                 CURVE_LOADS,
                 CURVE_LOADS / k[r, i] + g[r, i] * (1 - np.exp(-CURVE_LOADS / p0)),
