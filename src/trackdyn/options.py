@@ -155,7 +155,10 @@ class TrackSpec(Strict):
 
     def paths(self, base: Path) -> tuple[Path | None, Path | None]:
         """Both files relative to ``base`` (None where not given: the example)."""
-        return tuple(None if p is None else base / p for p in (self.geometry, self.supports))
+        geometry, supports = (
+            None if p is None else base / p for p in (self.geometry, self.supports)
+        )
+        return geometry, supports
 
     def load(self, base: Path):
         """The track (`trackdyn.track.track.Track`)."""

@@ -246,7 +246,7 @@ class Ballast:
         self.reseat = void if seated else np.zeros_like(void)  # closed by tamping [m]
         self.void = void - self.reseat
         self.initial = self.state(np.zeros_like(self.void))
-        self._secant0 = {}
+        self._secant0: dict[float, tuple[np.ndarray, np.ndarray]] = {}  # by static load
 
     @property
     def stiffness(self) -> np.ndarray:

@@ -342,9 +342,15 @@ def predict(track: Track, traffic, law, options=None, *, zones=(), progress=Fals
     extra = [float(m) for m in o.snapshot_mgt if 0.0 < m < total]
     snap_at = np.unique(np.concatenate([np.arange(0.0, total, every), extra, [total]]))
     level, mgt, geometry = np.zeros(shape), 0.0, track.geometry
-    history = {"mgt": [0.0], "settlement": [level], "geometry": [geometry],
+    history: dict[str, list] = {"mgt": [0.0], "settlement": [level], "geometry": [geometry],
                "hanging_gap": [state.hanging_gap]}  # fmt: skip
-    steps = {"start": [], "end": [], "peak_load": [], "max_settlement": [], "load_updates": []}
+    steps: dict[str, list[float]] = {
+        "start": [],
+        "end": [],
+        "peak_load": [],
+        "max_settlement": [],
+        "load_updates": [],
+    }
     with progress_bar(progress, total, "tonnage [MGT]") as bar:
         while mgt < total:
             if len(steps["start"]) >= o.max_steps:
@@ -421,7 +427,7 @@ def predict(track: Track, traffic, law, options=None, *, zones=(), progress=Fals
                                         geometry.profile(r)) for r in RAILS]  # fmt: skip
                     ballast.tamp(level, state, held, np.array(change))
                     geometry = tamped
-                    acc.restart(held, o.maintenance.memory_kept)
+                    acc.restart(held, maint.o.memory_kept)
                     state = ballast.state(level, state)
                     reference = ballast.geometry(geometry, state, sign=-1.0)
                     fresh = mgt

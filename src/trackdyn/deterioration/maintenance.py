@@ -211,12 +211,15 @@ class Maintenance:
         if self.o.policy != "fixed":
             return np.inf
         step = self.o.interval_mgt
+        assert step is not None  # required by the "fixed" policy (the model's check)
         return (np.floor(mgt / step + 1e-9) + 1) * step
 
     def due(self, mgt: float, sd) -> np.ndarray:
         """Segments to tamp at ``mgt`` given the D1 SD (rail, segment) [mm]."""
         if self.o.policy == "fixed":
-            hit = np.isclose(mgt, np.round(mgt / self.o.interval_mgt) * self.o.interval_mgt)
+            step = self.o.interval_mgt
+            assert step is not None  # required by the "fixed" policy (the model's check)
+            hit = np.isclose(mgt, np.round(mgt / step) * step)
             return np.arange(self.starts.size) if hit and mgt > 0 else np.array([], int)
         ready = mgt - self.last >= self.o.min_interval_mgt
         over = np.flatnonzero((np.max(sd, axis=0) >= self.threshold * (1 - DUE_MARGIN)) & ready)

@@ -317,8 +317,9 @@ def vehicle_shares(ds) -> pd.DataFrame:
     pos = ds.sleeper_distance.values
     parts = ds.settlement_by_vehicle.values  # (vehicle, rail, sleeper) [m]
     total = parts.sum(axis=0)
-    level = [[longitudinal_level(pos, p[r], "D1") for r in range(p.shape[0])] for p in parts]
-    level = np.array(level)
+    level = np.array(
+        [[longitudinal_level(pos, p[r], "D1") for r in range(p.shape[0])] for p in parts]
+    )
     whole = level.sum(axis=0)
     variance = float(np.sum(whole * whole))
     mean_total = float(total.mean())

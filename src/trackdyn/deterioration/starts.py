@@ -82,7 +82,7 @@ def tamped_geometry(geometry: Geometry, extent, segment_length: float,
         else:
             a = brentq(excess, 0.0, 1.0, xtol=1e-6)
         profiles[rail] = z - a * d1
-    return dataclasses.replace(geometry, **profiles)
+    return dataclasses.replace(geometry, left=profiles["left"], right=profiles["right"])
 
 
 def surveyed_geometry(geometry: Geometry, shortest: float = SHORTEST) -> Geometry:

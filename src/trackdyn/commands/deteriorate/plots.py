@@ -239,6 +239,7 @@ def line_diagram(datasets, path, title: str = "") -> None:
         ax.text(offset + length / 2, 1.01, ds.attrs["section"], transform=ax.get_xaxis_transform(),
                 ha="center", va="bottom", fontsize=8)  # fmt: skip
         offset += length
+    assert mesh is not None  # datasets is not empty (the max above)
     bar = fig.colorbar(mesh, ax=ax, label="D1 SD, worse rail [mm]")
     bar.ax.axhline(threshold, color="k", lw=1.5)
     handles, labels = ax.get_legend_handles_labels()

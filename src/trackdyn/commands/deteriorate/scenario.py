@@ -226,6 +226,7 @@ class DeteriorationScenario(Strict):
         """Traffic to predict over [MGT]."""
         m = self.maintenance
         if m is not None and m.horizon_years is not None:
+            assert m.annual_mgt is not None  # given together (the model's check)
             return m.horizon_years * m.annual_mgt
         return self.loop.total_mgt
 
@@ -312,5 +313,5 @@ def resolve_inputs(spec: DeteriorationScenario, base: Path):
         label = t.label or Path(t.vehicle).stem
         traffic.append(Traffic(vehicle, t.speed_kmh / 3.6, t.passages_per_mgt, label))
     s = spec.settlement
-    law = load_law(s.law, None if s.file is None else base / s.file, **s.overrides)
+    law = load_law(s.law, None if s.file is None else base / s.file, "open", **s.overrides)
     return traffic, law

@@ -51,7 +51,7 @@ def read_sections(path) -> list[Section]:
                 "letters, digits, '_', '-' and '.'"
             )
         seen.add(name)
-        files = []
+        files: list[str | None] = []
         for key in ("geometry", "supports", "zones"):
             value = getattr(row, key, None)
             if key == "zones" and not isinstance(value, str):
