@@ -100,7 +100,8 @@ class Objective:
                  residual=None, chord: bool = False):  # fmt: skip
         self.problem, self.workers, self.scheduler, self.log = problem, workers, scheduler, log
         self.residual = residual or (lambda ds: residuals(problem, compare(problem, ds)))
-        self.chord, self.fixed = chord, None
+        self.chord = chord
+        self.fixed: np.ndarray | None = None  # the chord method's Jacobian
         self.cache: dict[tuple, np.ndarray] = {}
         self.datasets: dict[tuple, object] = {}  # runs of the points evaluated, not neighbours
         self.runs = 0

@@ -33,11 +33,13 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from trackdyn.calibration.surveys import (
     REFINE,
+    Alignment,
     align,
     common_grid,
     d1_change,
@@ -45,7 +47,7 @@ from trackdyn.calibration.surveys import (
     read_survey,
 )
 from trackdyn.deterioration.law_files import law_bounds, law_file_table, law_units
-from trackdyn.deterioration.loop import NO_TRAFFIC_LOAD
+from trackdyn.deterioration.loop import NO_TRAFFIC_LOAD, LoopOptions
 from trackdyn.deterioration.runs import Section, SectionTask, run_section, run_sections
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import read_supports
@@ -117,7 +119,7 @@ class Calibration:
         Bending stiffness of the rail [N m^2].
     """
 
-    spec: object
+    spec: Any  # a CalibrationScenario: the command layer's model, not imported here
     base: Path
     section: Section
     traffic: tuple
@@ -136,8 +138,8 @@ class Calibration:
     use: np.ndarray
     fitted: np.ndarray
     units: tuple
-    options: object
-    fit_options: object
+    options: LoopOptions
+    fit_options: LoopOptions
     position: np.ndarray
     stiffness: np.ndarray
     EI: float
@@ -229,7 +231,7 @@ def prepare(spec, base: Path, traffic, law, options) -> Calibration:
     supports_file = base / spec.track.supports
     supports = read_supports(supports_file)
     extent = Track(geometries[0], supports).extent
-    alignments = [None] * len(files)
+    alignments: list[Alignment] = []
     for i, (g, file) in enumerate(zip(geometries, files, strict=True)):
         a = align(geometries[0], g, spec.fit.max_shift_m)
         if a.correlation < spec.fit.min_correlation:
@@ -239,7 +241,7 @@ def prepare(spec, base: Path, traffic, law, options) -> Calibration:
                 f"±{spec.fit.max_shift_m:g} m), below fit.min_correlation = "
                 f"{spec.fit.min_correlation:g}: not the same section?"
             )
-        alignments[i] = a
+        alignments.append(a)
     shifts = [a.shift for a in alignments]
     grid = common_grid(geometries[0], geometries, shifts, extent, REFINE)
     x = geometries[0].distance[grid]

@@ -55,12 +55,14 @@ def choices(command: str) -> str:
 
         return f"{vehicles}\n\nStudy keys:\n\n{file_keys(Study)}"
     if command in ("deteriorate", "calibrate"):
+        from trackdyn.commands.deteriorate.scenario import DeteriorationScenario
         from trackdyn.deterioration.settlement import LAWS
 
-        if command == "deteriorate":
-            from trackdyn.commands.deteriorate.scenario import DeteriorationScenario as spec
-        else:
-            from trackdyn.commands.calibrate.spec import CalibrationScenario as spec
+        spec: type[DeteriorationScenario] = DeteriorationScenario
+        if command == "calibrate":
+            from trackdyn.commands.calibrate.spec import CalibrationScenario
+
+            spec = CalibrationScenario
         laws = f"Settlement laws: {', '.join(LAWS)}."
         return f"{vehicles}\n\n{laws}\n\n{command.capitalize()} file keys:\n\n{file_keys(spec)}"
     if command == "track":

@@ -172,7 +172,8 @@ def alternative_tasks(study: InterventionsStudy, path, folder: Path):
         with named(where):
             sections = section_tasks(alternative_scenario(spec, alt, where), base)
             names = {t.section.name for t in sections}
-            unknown = sorted({s.section for s in alt.supports_scale} - names - {None})
+            given = {s.section for s in alt.supports_scale if s.section is not None}
+            unknown = sorted(given - names)
             if unknown:
                 raise TrackdynInputError(f"supports_scale: no section {unknown[0]!r}")
             for t in sections:

@@ -73,6 +73,7 @@ def field_table(result: FitResult) -> pd.DataFrame:
         A fit with an estimated field.
     """
     field = result.field
+    assert field is not None  # called for a fit with an estimated field
     return pd.DataFrame([
         {"distance_m": x, "rail": rail, "factor": field.factor[r, i],
          "standard_error": field.standard_error[r, i]}

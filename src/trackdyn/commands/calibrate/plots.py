@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from trackdyn.commands.plots import RAIL_COLOURS, plt, save
 
-STYLES = {
+STYLES: dict[str, dict[str, Any]] = {
     "measured": {"color": "k", "lw": 0.8},
     "predicted, fitted": {"color": "tab:orange", "lw": 0.9},
     "predicted, starting values": {"color": "0.55", "lw": 0.7, "ls": "--"},
@@ -50,6 +52,7 @@ def calibration_figure(problem, result, table, path) -> None:
                 ax.set_ylabel("D1-band change [mm]\n(down +)")
             if k == later:
                 ax.set_xlabel("distance [m]")
+    assert top is not None  # a survey after the first (the spec's check)
     top.invert_yaxis()
     handles, labels = top.get_legend_handles_labels()
     parity = fig.add_subplot(grid[later, 0])
