@@ -101,7 +101,9 @@ class CalibrationTrackSpec(Strict):
 class CalibrationScenario(DeteriorationScenario):
     """A deterioration scenario with surveys and what to fit."""
 
-    track: CalibrationTrackSpec
+    # a calibration's own [track] model replaces the scenario's: pydantic allows a field
+    # of another type in a subclass, mypy flags it as an incompatible override
+    track: CalibrationTrackSpec  # type: ignore[assignment]
     survey: list[SurveySpec] = Field(min_length=2)
     fit: FitSpec
 
