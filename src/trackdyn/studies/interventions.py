@@ -96,7 +96,8 @@ def maintenance_totals(datasets) -> dict:
         length tamped or renewed per 100 MGT [m].
     """
     out = dict.fromkeys(("tampings", "renewals", "tamped_m", "renewed_m"), 0.0)
-    intervals, per_100 = [], 0.0
+    intervals: list[float] = []
+    per_100 = 0.0
     for ds in datasets:
         seg = ds.intervention_segment.values
         length = (ds.segment_end - ds.segment_start).values[seg]

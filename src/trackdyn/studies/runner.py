@@ -142,7 +142,7 @@ def run_study(tasks: list[Task], *, workers=None, scheduler=None, progress=False
     """
     from trackdyn.parallel import run_tasks
 
-    share = -(-len(tasks) // (1 if workers == 1 and not scheduler else workers or cpu_count()))
+    share = -(-len(tasks) // (1 if workers == 1 and not scheduler else workers or cpu_count() or 1))
     groups = batches(tasks, size=max(1, min(BATCH_RUNS, share)))
     done = run_tasks(
         groups, run_batch, workers=workers, scheduler=scheduler, progress=progress,

@@ -47,7 +47,7 @@ class MatrixSpec(Strict):
     variants (factors on the vehicle's values)."""
 
     vehicles: list[str] = Field(["empty", "loaded"], min_length=1)
-    cases: list[Literal[tuple(CASES)]] = Field(list(CASES), min_length=1)
+    cases: list[Literal[tuple(CASES)]] = Field(list(CASES), min_length=1)  # type: ignore[valid-type]  # noqa: E501 (a Literal from the CASES registry, which pydantic checks)
     damping: dict[str, dict[str, PositiveFloat]] = {"low": {}, "high": {"rho1": 4.0, "mu": 1.4}}
 
 
@@ -90,12 +90,12 @@ def _scaled(source: str, overrides: dict, factors: dict) -> dict:
 
 def tasks(study: Study, base: Path) -> list[Task]:
     """Expand a study into its independent runs."""
-    paths = [None if p is None else str(p) for p in study.track.paths(base)]
+    geometry, supports = (None if p is None else str(p) for p in study.track.paths(base))
     template = Task(
         labels={},
         vehicle=str(study.vehicle.source(base)),
         overrides=dict(study.vehicle.overrides),
-        track=TrackRef(*paths),
+        track=TrackRef(geometry, supports),
         run=study.run,
     )
     if study.kind == "matrix":
@@ -109,7 +109,7 @@ def tasks(study: Study, base: Path) -> list[Task]:
                     template,
                     vehicle=source,
                     overrides=_scaled(source, template.overrides, factors),
-                    track=TrackRef(*paths, case=case),
+                    track=TrackRef(geometry, supports, case=case),
                     labels={"vehicle": Path(name).stem, "damping": damping, "case": case},
                 )
             )
@@ -123,6 +123,7 @@ def tasks(study: Study, base: Path) -> list[Task]:
         ]
     s = study.sensitivity
     base_run = dataclasses.replace(template, labels={"parameter": "baseline", "factor": 1.0})
+    labels: list[dict[str, object]]
     if s.grid:
         combos = itertools.product(s.factors, repeat=len(s.parameters))
         variants = [dict(zip(s.parameters, c, strict=True)) for c in combos]
