@@ -54,6 +54,7 @@ class Hardening:
         self._parts: list[tuple] = []  # per term: (increment, shares) of `prepare`
         self._owners: list[int] = []
         self._cycles = np.zeros(shape)
+        self._classes_now: list = []  # the load classes last prepared
 
     def _classes(self, cycles):
         """Per wheel: (cycles per MGT, load factor) per rail and sleeper; owners; per MGT."""
@@ -77,6 +78,7 @@ class Hardening:
             sleeper [N] and track stiffness per sleeper [N/m].
         """
         classes, self._owners, self._cycles = self._classes(cycles)
+        self._classes_now = classes
         self._parts = [t.prepare(s, classes) for t, s in zip(self.law.terms, self.states,
                                                              strict=True)]  # fmt: skip
         parts = self._parts
@@ -98,11 +100,14 @@ class Hardening:
         self.N = self.N + self._cycles * dm
         return split
 
-    def restart(self, held, kept: float) -> None:
-        """Cut the law's memory at the rail seats ``held`` (bool, per rail and sleeper) to
-        the fraction ``kept`` [-] (after tamping: the early, fast phase comes again); ``N``
-        still counts every cycle."""
-        self.states = [np.where(held, kept * s, s) for s in self.states]
+    def restart(self, held, mgt: float) -> None:
+        """Set the law's memory at the rail seats ``held`` (bool, per rail and sleeper) to
+        that of new ballast after ``mgt`` [MGT] of the traffic last prepared (after tamping:
+        the early, fast phase comes again, the same after every tamping); ``N`` still
+        counts every cycle."""
+        shape = self.N.shape
+        fresh = [t.prepare(t.start(shape), self._classes_now)[0](mgt)[1] for t in self.law.terms]
+        self.states = [np.where(held, f, s) for f, s in zip(fresh, self.states, strict=True)]
 
 
 class LoadHistory(Hardening):
@@ -163,8 +168,8 @@ class LoadHistory(Hardening):
         self.h = self.h + self._rate * dm
         return split
 
-    def restart(self, held, kept: float) -> None:
-        self.h = np.where(np.asarray(held)[..., None], kept * self.h, self.h)
+    def restart(self, held, mgt: float) -> None:
+        self.h = np.where(np.asarray(held)[..., None], self._rate * mgt, self.h)
 
 
 def memory(law, shape, vehicles: int) -> Hardening:
@@ -212,7 +217,7 @@ class Zoned:
         """See `Hardening.advance`."""
         return self._join(((i, acc.advance(dm)) for i, acc in self.parts), (self.vehicles,))
 
-    def restart(self, held, kept: float) -> None:
+    def restart(self, held, mgt: float) -> None:
         """See `Hardening.restart`."""
         for i, acc in self.parts:
-            acc.restart(np.asarray(held)[:, i], kept)
+            acc.restart(np.asarray(held)[:, i], mgt)

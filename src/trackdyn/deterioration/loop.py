@@ -427,7 +427,7 @@ def predict(track: Track, traffic, law, options=None, *, zones=(), progress=Fals
                                         geometry.profile(r)) for r in RAILS]  # fmt: skip
                     ballast.tamp(level, state, held, np.array(change))
                     geometry = tamped
-                    acc.restart(held, maint.o.memory_kept)
+                    acc.restart(held, maint.o.consolidated_mgt)
                     state = ballast.state(level, state)
                     reference = ballast.geometry(geometry, state, sign=-1.0)
                     fresh = mgt

@@ -14,7 +14,8 @@ intervention instead (the damage of the tampings is undone; the geometry is rest
 by a tamping). A section with no traffic is never tamped.
 
 What a tamping does, over the tamped stretch (whole segments, the machine running in and
-out over ``run_out_m`` inside it, so the track outside is not touched):
+out over ``run_out_m`` beyond them, so the joints with untamped segments are tamped too and
+stay smooth; the track beyond the run-out is not touched):
 
 1. **Geometry.** The D1 band of each rail (EN 13848-1, 3-25 m) is replaced by
    ``D1' = ρ k D1 + sqrt(1 - ρ²) σ' ε``: the part of the old shape the track keeps
@@ -27,9 +28,11 @@ out over ``run_out_m`` inside it, so the track outside is not touched):
 2. **Lift.** The rail is lifted to the new profile plus a general lift
    (``general_lift_mm``) and the ballast packed under every sleeper: no sleeper hangs
    after tamping (`Ballast.tamp`).
-3. **Settlement after tamping.** The settlement law's memory at the tamped sleepers is
-   cut to ``memory_kept`` (its equivalent cycles, consolidation or load history: the
-   early, fast phase comes again, `trackdyn.deterioration.accumulation`), and the lifted
+3. **Settlement after tamping.** The settlement law's memory at the tamped sleepers
+   (its equivalent cycles, consolidation or load history,
+   `trackdyn.deterioration.accumulation`) is set to that of new ballast after
+   ``consolidated_mgt`` of the current traffic: the early, fast phase comes again, the
+   same after every tamping, so that without ballast damage the cycles repeat. The lifted
    ballast is loose: its
    settlement rate is multiplied by ``1 + (lift / lift_reference_mm) exp(-ΔM /
    loosening_mgt)`` (``ΔM`` the tonnage since the tamping), so the track settles back
@@ -107,15 +110,16 @@ class MaintenanceOptions(Strict):
         Correlation of the D1 profile after tamping with the one before [-]; default 0.5,
         illustrative.
     run_out_m : float
-        Length over which the machine runs in and out at each end of the tamped stretch
-        [m]; default 10, illustrative.
+        Length over which the machine runs in and out beyond each end of the tamped
+        stretch [m]; default 10, illustrative (a run-out inside the stretch leaves the
+        segment joints untamped, and over many cycles they run away).
     general_lift_mm : float
         Lift of the lowest point of the stretch [mm]; default 10, illustrative.
-    memory_kept : float
-        Fraction of the settlement law's memory a tamping leaves [-]; default 0.5,
-        illustrative (0: the law starts again as on new track, and the shipped laws, which
-        settle a third of their 50 MGT settlement in the first MGT, then re-create most of
-        the unevenness within the minimum interval).
+    consolidated_mgt : float
+        Tonnage of the current traffic after which new ballast has the memory the law has
+        right after tamping [MGT]; default 10, illustrative (0: the law starts again as on
+        new track, and the shipped laws, which settle a third of their 50 MGT settlement in
+        the first MGT, then re-create most of the unevenness within the minimum interval).
     lift_reference_mm : float
         Lift that doubles the settlement rate just after tamping [mm]; default 40,
         illustrative.
@@ -138,7 +142,7 @@ class MaintenanceOptions(Strict):
     kept_correlation: float = Field(0.5, ge=0.0, le=1.0)
     run_out_m: NonNegativeFloat = 10.0
     general_lift_mm: NonNegativeFloat = 10.0
-    memory_kept: float = Field(0.5, ge=0.0, le=1.0)
+    consolidated_mgt: NonNegativeFloat = 10.0
     lift_reference_mm: PositiveFloat = 40.0
     loosening_mgt: PositiveFloat = 3.0
     damage_per_tamping: NonNegativeFloat = 0.1
@@ -204,7 +208,6 @@ class Maintenance:
         self.since = np.full(shape, np.inf)  # tonnage since it [MGT]
         self.done: list[Intervention] = []
         self.expected: set[int] = set()  # segments a step was cut for (`until_due`)
-        self._last_sd = np.zeros((len(RAILS), n))
 
     def next_due(self, mgt: float) -> float:
         """Next tonnage of a fixed-policy tamping after ``mgt`` [MGT] (inf: none)."""
@@ -247,18 +250,20 @@ class Maintenance:
 
         x, target = geometry.distance, self.threshold
 
-        def excess(dm):
+        def worst(dm):  # the predicted D1 SD of the segments ready, worst rail [mm]
             e = settle(dm)
             moved = {r: geometry.profile(r) + np.interp(x, self.position, e[k])
                      for k, r in enumerate(RAILS)}  # fmt: skip
             sd = d1_sd(dataclasses.replace(geometry, **moved), extent, segment_length)[0]
-            self._last_sd = sd
-            return float(np.max(sd[:, ready])) - target
+            return np.where(ready, sd.max(axis=0), -np.inf)
+
+        def excess(dm):
+            return float(worst(dm).max()) - target
 
         if excess(cap) <= 0 or excess(0.0) >= 0:
             return cap
         dm = brentq(excess, 0.0, cap, xtol=1e-9 * cap, rtol=1e-6)
-        self.expected = {int(np.argmax(np.where(ready, self._last_sd.max(axis=0), -np.inf)))}
+        self.expected = {int(np.argmax(worst(dm)))}
         return dm
 
     def factor(self, dm: float) -> np.ndarray:
@@ -311,32 +316,34 @@ class Maintenance:
         before = d1_sd(geometry, extent, segment_length)[0]
         profiles, lift = {}, np.zeros((len(RAILS), self.position.size))
         rng = np.random.default_rng((self.o.seed, len(self.done)))
+        x = geometry.distance
         runs = _contiguous(segments)
+        weights, at_sleepers = (self._weights(runs, where) for where in (x, self.position))
         for r, rail in enumerate(RAILS):
-            x, z = geometry.distance, geometry.profile(rail).copy()
+            z = geometry.profile(rail).copy()
             d1 = longitudinal_level(x, z, "D1")
             noise = longitudinal_level(x, rng.standard_normal(x.size), "D1")
-            for run in runs:
-                a, b = self.starts[run[0]], self.ends[run[-1]]
-                inside = (x >= a) & (x <= b)
+            for run, w, ws in zip(runs, weights, at_sleepers, strict=True):
+                inside = w >= 1.0
                 sd = float(np.sqrt(np.mean(before[r, run] ** 2))) * 1e-3
                 new_sd = self.o.recovery_offset_mm * 1e-3 + self.o.recovery_slope * sd
                 rho = self.o.kept_correlation
                 eps = noise / np.std(noise[inside])
                 kept = rho * (new_sd / sd if sd > 0 else 0.0) * d1
                 target = kept + np.sqrt(1 - rho * rho) * new_sd * eps
-                ends = (run[0] > 0, run[-1] < self.starts.size - 1)  # no run-out at the
-                w = _run_in_out(x, a, b, self.o.run_out_m, ends)  # section's own ends
                 z = z + w * (target - d1)
-                up = np.interp(self.position, x, w * (d1 - target))  # lift [m], up
-                on = (self.position >= a) & (self.position <= b)
-                lift[r, on] = self.o.general_lift_mm * 1e-3 + up[on] - up[on].min()
+                # lift [m], up: the general lift where the machine is fully in, the
+                # correction relative to its lowest point there
+                up = ws * np.interp(self.position, x, d1 - target)
+                low = up[ws >= 1.0].min()
+                lift[r] = np.maximum(lift[r], ws * (self.o.general_lift_mm * 1e-3 - low) + up)
             profiles[rail] = z
         new = dataclasses.replace(geometry, **profiles)
         after = d1_sd(new, extent, segment_length)[0]
-        held = self.sleepers(segments)
+        held = np.broadcast_to(sum(at_sleepers, np.zeros(self.position.size)) > 0, lift.shape)
         renew = np.isin(np.arange(self.starts.size), segments) & (self.count >= self.o.max_tampings)
-        fresh = self.sleepers(np.flatnonzero(renew))
+        renewed = self._weights(_contiguous(np.flatnonzero(renew)), self.position)
+        fresh = np.broadcast_to(sum(renewed, np.zeros(self.position.size)) > 0, lift.shape)
         worn = self.damage * (1.0 + self.o.damage_per_tamping)
         self.damage = np.where(fresh, 1.0, np.where(held, worn, self.damage))
         self.lift = np.where(held, lift, self.lift)
@@ -351,6 +358,15 @@ class Maintenance:
         return new, held
 
 
+    def _weights(self, runs, x) -> list[np.ndarray]:
+        """Weight of each run's tamped profile at ``x`` (`_run_in_out`); where the ramps of
+        two runs overlap they share, so the weights add up to 1 at most [-]."""
+        weights = [_run_in_out(x, self.starts[run[0]], self.ends[run[-1]], self.o.run_out_m)
+                   for run in runs]  # fmt: skip
+        total = np.maximum(sum(weights, np.zeros(np.shape(x))), 1.0)
+        return [w / total for w in weights]
+
+
 def _contiguous(segments) -> list[list[int]]:
     """Runs of adjacent segment indices."""
     runs: list[list[int]] = []
@@ -362,16 +378,12 @@ def _contiguous(segments) -> list[list[int]]:
     return runs
 
 
-def _run_in_out(x, a: float, b: float, length: float, ends=(True, True)) -> np.ndarray:
-    """Weight of the tamped profile: 1 inside ``[a, b]`` less cosine ramps of ``length`` at
-    the ends flagged in ``ends`` (start, end), 0 outside [-]."""
+def _run_in_out(x, a: float, b: float, length: float) -> np.ndarray:
+    """Weight of the tamped profile: 1 inside ``[a, b]``, cosine ramps over ``length``
+    beyond its ends, 0 further out [-]."""
     inside = (x >= a) & (x <= b)
     if length <= 0:
         return inside.astype(float)
-    room = np.full(x.shape, np.inf)
-    if ends[0]:
-        room = np.minimum(room, x - a)
-    if ends[1]:
-        room = np.minimum(room, b - x)
-    ramp = np.clip(room / length, 0.0, 1.0)
-    return np.where(inside, 0.5 - 0.5 * np.cos(np.pi * ramp), 0.0)
+    beyond = np.maximum(a - x, x - b)  # distance outside [a, b], negative inside
+    ramp = np.clip(1.0 - beyond / length, 0.0, 1.0)
+    return np.where(inside, 1.0, 0.5 - 0.5 * np.cos(np.pi * ramp))
