@@ -6,7 +6,8 @@ those that are due:
 
 - ``policy = "threshold"``: a segment whose D1 SD reaches the loop's
   ``threshold_sd_mm`` on either rail, at least ``min_interval_mgt`` after its last
-  tamping; ``neighbours`` segments each side are tamped with it (the stretch around it);
+  tamping; ``neighbours`` segments each side are tamped with it (the stretch around it),
+  and so is every segment past the alert limit (``alert_fraction`` of the threshold);
 - ``policy = "fixed"``: every segment every ``interval_mgt``.
 
 A segment tamped ``max_tampings`` times gets its ballast renewed at the next
@@ -57,6 +58,10 @@ the lift was larger).
 Abadi, T., Le Pen, L., Zervos, A., Powrie, W. (2016). Effect of sleeper interventions on
 railway track performance. Procedia Engineering 143, 999-1006 (tamping damages ballast).
 
+EN 13848-5:2017. Railway applications - Track - Track geometry quality - Part 5:
+Geometric quality levels - Plain line, switches and crossings. CEN, Brussels (alert and
+intervention limits).
+
 EN 13848-1:2019. Railway applications - Track - Track geometry quality - Part 1:
 Characterisation of track geometry. CEN, Brussels.
 """
@@ -101,6 +106,10 @@ class MaintenanceOptions(Strict):
         Shortest time between two tampings of a segment [MGT]; default 5, illustrative.
     neighbours : int
         Segments each side tamped with a segment that is due [-]; default 0.
+    alert_fraction : float
+        When a segment is due, every segment whose D1 SD has passed this fraction of the
+        threshold (the alert limit; the threshold is the intervention limit, EN 13848-5)
+        is tamped with it [-]; default 0.8, illustrative (1: only the segments due).
     max_tampings : int
         Tampings of a segment before its ballast is renewed [-]; default 6, illustrative.
     recovery_offset_mm, recovery_slope : float
@@ -136,6 +145,7 @@ class MaintenanceOptions(Strict):
     interval_mgt: PositiveFloat | None = None
     min_interval_mgt: NonNegativeFloat = 5.0
     neighbours: NonNegativeInt = 0
+    alert_fraction: float = Field(0.8, gt=0.0, le=1.0)
     max_tampings: PositiveInt = 6
     recovery_offset_mm: NonNegativeFloat = 0.6
     recovery_slope: float = Field(0.3, ge=0.0, le=1.0)
@@ -225,9 +235,13 @@ class Maintenance:
             hit = np.isclose(mgt, np.round(mgt / step) * step)
             return np.arange(self.starts.size) if hit and mgt > 0 else np.array([], int)
         ready = mgt - self.last >= self.o.min_interval_mgt
-        over = np.flatnonzero((np.max(sd, axis=0) >= self.threshold * (1 - DUE_MARGIN)) & ready)
+        worst = np.max(sd, axis=0)
+        over = np.flatnonzero((worst >= self.threshold * (1 - DUE_MARGIN)) & ready)
         over = np.union1d(over, sorted(self.expected)).astype(int)
         self.expected = set()
+        if over.size:  # the machine is there: segments past the alert limit go with it
+            alert = np.flatnonzero((worst >= self.o.alert_fraction * self.threshold) & ready)
+            over = np.union1d(over, alert)
         k = self.o.neighbours
         near = {j for i in over for j in range(i - k, i + k + 1) if 0 <= j < self.starts.size}
         return np.array(sorted(near), dtype=int)
@@ -235,7 +249,9 @@ class Maintenance:
     def until_due(self, mgt: float, settle, geometry, extent, segment_length: float,
                   cap: float) -> float:  # fmt: skip
         """Traffic until a segment that may be tamped reaches the threshold [MGT], at most
-        ``cap`` (threshold policy; the fixed one lands on its tonnages by `next_due`).
+        ``cap`` and at most until the next segment may be tamped again (its minimum
+        interval passes, threshold policy; the fixed one lands on its tonnages by
+        `next_due`).
 
         The rail is taken to follow the settlement increment ``settle(dm)`` [m] at the
         sleepers; the step ends where the D1 SD so predicted reaches the threshold, so that
@@ -243,8 +259,12 @@ class Maintenance:
         reaches it is then due at the step end (`due`), whatever the rail-seat load updates
         within the step did to its D1 SD.
         """
-        ready = mgt - self.last >= self.o.min_interval_mgt
-        if self.o.policy != "threshold" or not ready.any():
+        if self.o.policy != "threshold":
+            return cap
+        wait = self.last + self.o.min_interval_mgt - mgt  # until each segment may be tamped
+        cap = min(cap, float(wait[wait > 0].min(initial=np.inf)))
+        ready = wait <= 0
+        if not ready.any():
             return cap
         from trackdyn.deterioration.results import d1_sd
 
@@ -356,7 +376,6 @@ class Maintenance:
             mean_lift = float(lift[self.sleepers([i])].mean())
             self.done.append(Intervention(mgt, int(i), kind, before[:, i], after[:, i], mean_lift))
         return new, held
-
 
     def _weights(self, runs, x) -> list[np.ndarray]:
         """Weight of each run's tamped profile at ``x`` (`_run_in_out`); where the ramps of
