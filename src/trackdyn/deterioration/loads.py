@@ -165,12 +165,14 @@ class StepLoads:
     """
 
     def __init__(self, run, model, ballast, state):
-        self.run, self.model, self.ballast = run, model, ballast
+        self.run, self.model, self.ballast, self.state = run, model, ballast, state
         self.dynamic = discrete_passage_loads(run, model)
         self.start = passage_loads(run, ballast, state, model)
 
     def at(self, state) -> np.ndarray:
         """Load cycles on ``state``, (wheels, sleepers) [N]."""
+        if state is self.state:
+            return self.dynamic
         now = passage_loads(self.run, self.ballast, state, self.model)
         return np.maximum(self.dynamic + now - self.start, 0.0)
 
