@@ -20,7 +20,7 @@ the discrete loop follows the redistribution this causes through the rail beam: 
 cycle is the discrete run's plus the change of the beam's (`passage_loads`, the same wheel
 loads) since the ballast state the run was made on (`StepLoads`). Without it a sleeper
 that sheds load keeps shedding it through a whole step: a 1 mm void under one sleeper
-closed within the first train and its sleeper came out 1 mm proud, carrying 40 % more
+closed within the first train and its sleeper came out about 1 mm proud, carrying 38 % more
 than the far sleepers.
 """
 
