@@ -157,6 +157,34 @@ def test_an_alternative_without_changes_is_the_scenario_itself(folder, tmp_path)
     xr.testing.assert_identical(got, expected)
 
 
+PADS = """
+[[alternative]]
+name = "pads"
+settlement_scale = [{ from_m = 21, to_m = 39, factor = 0.56 }]
+"""
+
+
+def test_settlement_scale_multiplies_the_rate_in_its_range_only(folder, tmp_path):
+    """Under-sleeper pads over 21-39 m: the settlement rate there times 0.56 (44 % less
+    ballast settlement, Gräbe et al. 2016, J. SAICE 58(2)); the loop's first step (one
+    train, the same loads) settles exactly 0.56 times as much there and the same outside."""
+    (tmp_path / "study.toml").write_text(STUDY + PADS)
+    for name in ("scenario.toml", "geometry.csv", "supports.csv"):
+        (tmp_path / name).write_bytes((folder / name).read_bytes())
+    study, _ = load_toml(InterventionsStudy, tmp_path / "study.toml")
+    labelled, _ = alternative_tasks(study, tmp_path / "study.toml", tmp_path)
+    task = {name: t for name, t in labelled}
+    x = read_supports(tmp_path / "supports.csv").position
+    inside = (x >= 21.0) & (x <= 39.0)
+    np.testing.assert_array_equal(task["pads"].options.rate_scale, np.where(inside, 0.56, 1.0))
+    assert task["base"].options.rate_scale is None
+    first = [dataclasses.replace(task[n], options=task[n].options.model_copy(
+        update={"total_mgt": 1e-3, "snapshot_every_mgt": 1e-3})) for n in ("base", "pads")]  # fmt: skip
+    base, pads = (ds.settlement.isel(mgt=1).values for ds in run_sections(first, workers=1))
+    assert base.min() > 0.0
+    np.testing.assert_allclose(pads, base * np.where(inside, 0.56, 1.0), rtol=1e-12)
+
+
 def test_a_failed_run_names_its_section_and_alternative(folder, tmp_path):
     study, _ = load_toml(InterventionsStudy, folder / "study.toml")
     labelled, _ = alternative_tasks(study, folder / "study.toml", tmp_path)
@@ -207,8 +235,14 @@ def test_the_shipped_example_expands_to_its_alternatives(tmp_path):
     study, _ = load_toml(InterventionsStudy, to / "interventions.toml")
     labelled, _ = alternative_tasks(study, to / "interventions.toml", tmp_path)
     assert [name for name, _ in labelled] == [a.name for a in study.alternative]  # 1 section
-    # only soft-spot-fixed scales supports; a section of files is named after its geometry
-    assert [p.name for p in tmp_path.glob("*.csv")] == ["soft-spot-fixed_geometry_supports.csv"]
+    # soft-spot-fixed and pads-at-the-bridge scale supports; a section of files is named
+    # after its geometry
+    assert sorted(p.name for p in tmp_path.glob("*.csv")) == [
+        "pads-at-the-bridge_geometry_supports.csv",
+        "soft-spot-fixed_geometry_supports.csv",
+    ]
+    pads = dict(labelled)["pads-at-the-bridge"].options.rate_scale
+    assert min(pads) == 0.56 and max(pads) == 1.0
 
 
 @pytest.mark.slow

@@ -16,6 +16,7 @@ name = "base"                    # no changes: the scenario as it is
 name = "soft-spot-fixed"
 cost = 5000.0                    # of the intervention itself
 supports_scale = [{ from_m = 560, to_m = 580, factor = 2.0 }]   # section = "..." optional
+# settlement_scale = [{ from_m = 500, to_m = 700, factor = 0.56 }]  # settlement rate there
 # settlement_overrides = { alpha = 0.3 }    # merged into [settlement] overrides
 # vehicle_overrides = { mu = 0.2 }          # merged into every [[traffic]] overrides
 # threshold_sd_mm = 2.0                     # replaces [loop] threshold_sd_mm
@@ -41,7 +42,7 @@ from trackdyn.commands.deteriorate.scenario import DeteriorationScenario, load_d
 from trackdyn.commands.deteriorate.sections import NAME, section_tasks
 from trackdyn.commands.plots import TAB10, plt, save
 from trackdyn.commands.tables import frame_table
-from trackdyn.data import EXAMPLE_GEOMETRY, EXAMPLE_SUPPORTS, example_path
+from trackdyn.data import EXAMPLE_GEOMETRY, EXAMPLE_SUPPORTS, example_path, load_track
 from trackdyn.deterioration.runs import Section
 from trackdyn.errors import TrackdynInputError, named, require_workers
 from trackdyn.netcdf import write_netcdf
@@ -56,11 +57,12 @@ from trackdyn.studies.interventions import (
 )
 
 
-class SupportsScale(Strict):
-    """One range of ``supports_scale``: stiffness times ``factor`` [-] from ``from_m`` to
-    ``to_m`` [m] of ``section`` (default: every section); ``ramp`` ``"up"`` or ``"down"``
-    runs the factor linearly from 1 (a transition treatment), ``"none"`` (default) holds it
-    over the range (`trackdyn.studies.interventions.RAMPS`)."""
+class RangeScale(Strict):
+    """One range of ``supports_scale`` (support stiffness) or ``settlement_scale``
+    (settlement rate): times ``factor`` [-] from ``from_m`` to ``to_m`` [m] of ``section``
+    (default: every section); ``ramp`` ``"up"`` or ``"down"`` runs the factor linearly from
+    1 (a transition treatment), ``"none"`` (default) holds it over the range
+    (`trackdyn.studies.interventions.RAMPS`)."""
 
     from_m: float
     to_m: float
@@ -80,7 +82,8 @@ class Alternative(Strict):
 
     name: str = Field(pattern=NAME.pattern)
     cost: NonNegativeFloat = 0.0
-    supports_scale: list[SupportsScale] = Field(default_factory=list)
+    supports_scale: list[RangeScale] = Field(default_factory=list)
+    settlement_scale: list[RangeScale] = Field(default_factory=list)
     settlement_overrides: dict[str, StrictFloat] = Field(default_factory=dict)
     vehicle_overrides: dict[str, StrictFloat] = Field(default_factory=dict)
     threshold_sd_mm: PositiveFloat | None = None
@@ -143,6 +146,18 @@ def _scaled_section(sec: Section, alt: Alternative, folder: Path) -> Section:
     return dataclasses.replace(sec, geometry=geometry, supports=str(target))
 
 
+def _settlement_scaled(options, sec: Section, alt: Alternative):
+    """The loop options with the alternative's ``settlement_scale`` ranges of ``sec``."""
+    mine = [s for s in alt.settlement_scale if s.section in (None, sec.name)]
+    if not mine:
+        return options
+    position = load_track(sec.geometry, sec.supports).supports.position
+    factor = np.ones(position.size)
+    for s in mine:
+        factor *= Scale(s.from_m, s.to_m, s.factor, s.ramp).at(position)
+    return options.model_copy(update={"rate_scale": tuple(factor.tolist())})
+
+
 def scenario_file(study: InterventionsStudy, path) -> Path:
     """The deterioration scenario a study file names (relative to the study file)."""
     return Path(path).resolve().parent / study.scenario
@@ -172,13 +187,15 @@ def alternative_tasks(study: InterventionsStudy, path, folder: Path):
         with named(where):
             sections = section_tasks(alternative_scenario(spec, alt, where), base)
             names = {t.section.name for t in sections}
-            given = {s.section for s in alt.supports_scale if s.section is not None}
-            unknown = sorted(given - names)
-            if unknown:
-                raise TrackdynInputError(f"supports_scale: no section {unknown[0]!r}")
+            for key in ("supports_scale", "settlement_scale"):
+                given = {s.section for s in getattr(alt, key) if s.section is not None}
+                unknown = sorted(given - names)
+                if unknown:
+                    raise TrackdynInputError(f"{key}: no section {unknown[0]!r}")
             for t in sections:
                 sec = _scaled_section(t.section, alt, folder)
-                tasks.append((alt.name, dataclasses.replace(t, section=sec)))
+                options = _settlement_scaled(t.options, sec, alt)
+                tasks.append((alt.name, dataclasses.replace(t, section=sec, options=options)))
     return tasks, spec
 
 

@@ -137,6 +137,10 @@ class LoopOptions(Strict):
     rate_factor : tuple of tuple of float, optional
         A rate field given per rail and sleeper (2, n) [-], e.g. estimated by `trackdyn
         calibrate`; ``rate_cov`` and ``seed`` are then not used.
+    rate_scale : tuple of float, optional
+        Multiplier of the settlement rate per sleeper (both rails) [-] on top of the rate
+        field and the zones' own, e.g. under-sleeper pads over a range (the interventions
+        study's ``settlement_scale``); default none (1).
     sleeper_mass : float
         Sleeper mass per rail seat, hanging from the rail when its ballast sinks [kg];
         default 125.5 kg, the half-sleeper mass of Zhai et al. (2004).
@@ -176,6 +180,7 @@ class LoopOptions(Strict):
     rate_correlation_length: float = 3.0
     seed: int | tuple[int, ...] = 0
     rate_factor: tuple[tuple[float, ...], ...] | None = None
+    rate_scale: tuple[float, ...] | None = None
     sleeper_mass: float = 125.5
     run: RunOptions = RunOptions()
     rail: str = "60E1"
@@ -315,6 +320,11 @@ def predict(track: Track, traffic, law, options=None, *, zones=(), progress=Fals
             own = rate_field(pos.size, spacing, z.rate.cov, z.rate.correlation_length,
                              z.rate.seed)  # fmt: skip
             rate = np.where(z.holds(pos), own, rate)
+    if o.rate_scale is not None:
+        if len(o.rate_scale) != pos.size:
+            raise TrackdynInputError(f"rate_scale has {len(o.rate_scale)} values for "
+                                     f"{pos.size} sleepers")  # fmt: skip
+        rate = rate * np.asarray(o.rate_scale)
     laws = _zone_laws(law, zones, pos)
     sensitivity = sum(m * lw.load_sensitivity for m, lw in laws)
     runs, lins = _runs(track, traffic, o)
