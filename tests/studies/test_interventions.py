@@ -178,8 +178,9 @@ def test_settlement_scale_multiplies_the_rate_in_its_range_only(folder, tmp_path
     inside = (x >= 21.0) & (x <= 39.0)
     np.testing.assert_array_equal(task["pads"].options.rate_scale, np.where(inside, 0.56, 1.0))
     assert task["base"].options.rate_scale is None
-    first = [dataclasses.replace(task[n], options=task[n].options.model_copy(
-        update={"total_mgt": 1e-3, "snapshot_every_mgt": 1e-3})) for n in ("base", "pads")]  # fmt: skip
+    short = {"total_mgt": 1e-3, "snapshot_every_mgt": 1e-3}
+    first = [dataclasses.replace(task[n], options=task[n].options.model_copy(update=short))
+             for n in ("base", "pads")]  # fmt: skip
     base, pads = (ds.settlement.isel(mgt=1).values for ds in run_sections(first, workers=1))
     assert base.min() > 0.0
     np.testing.assert_allclose(pads, base * np.where(inside, 0.56, 1.0), rtol=1e-12)
