@@ -116,7 +116,7 @@ def test_threshold_policy_waits_the_minimum_interval_and_takes_neighbours(track)
 
 
 def test_segments_past_the_alert_limit_go_with_one_that_is_due(track):
-    m = _maintenance(track, alert_fraction=0.8)  # alert limit 0.8 x 1.6 = 1.28 mm
+    m = _maintenance(track, alert_fraction=0.8)  # alert limit 0.8 x 1.6 = 1.28 mm (not the default)
     sd = np.array([[1.3, 0.5, 1.2, 0.5], [0.5, 0.5, 0.5, 0.5]])
     assert m.due(1.0, sd).size == 0  # past the alert limit, but nothing is due
     sd[1, 3] = 1.6
@@ -127,8 +127,9 @@ def test_segments_past_the_alert_limit_go_with_one_that_is_due(track):
 def test_tampings_do_not_depend_on_the_step_size():
     """200 m of FRA class 5 track over 100 MGT, threshold 1.5 mm: the default step limit
     and half of it give the same tampings, at tonnages within 5 % (measured: 2.4 %; before
-    the step was cut at the end of the minimum interval and the alert limit grouped
-    segments, a segment got 5 tampings against 7)."""
+    the step was cut at the end of the minimum interval, the alert limit grouped segments
+    and a segment counted as due at 0.995 of the threshold rather than 0.98, a segment got
+    5 tampings against 7, and tonnages differed by 5 %)."""
     track = synthetic_track(200.0, spectrum="fra5", seed=7)
     runs = []
     for limit in (0.5e-3, 0.25e-3):
@@ -198,7 +199,7 @@ def test_a_transition_needs_several_times_the_tamping_of_open_track():
     """Embankment 60 kN/mm -> deck 240 kN/mm with approach zones, the shipped parameters of
     each kind, 150 MGT: the segment holding the transition is tamped more than twice as
     often as open track (Dutch transitions are maintained 4-8 times as often, Wang, Markine
-    & Liu 2017; measured here: 7 against 2)."""
+    & Liu 2017; measured here: 29 against 8)."""
     from trackdyn.deterioration import Zone
     from trackdyn.track.synthetic import Transition
 

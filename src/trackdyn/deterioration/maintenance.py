@@ -86,7 +86,7 @@ from trackdyn.options import Strict
 from trackdyn.track.quality import longitudinal_level
 from trackdyn.track.track import RAILS
 
-DUE_MARGIN = 0.02
+DUE_MARGIN = 0.005
 """Fraction under the threshold at which a segment counts as due at a step end [-]: the
 step ends where the D1 SD is predicted to reach the threshold (`Maintenance.until_due`),
 and the rail-seat load updates within the step move it a little."""
@@ -109,7 +109,7 @@ class MaintenanceOptions(Strict):
     alert_fraction : float
         When a segment is due, every segment whose D1 SD has passed this fraction of the
         threshold (the alert limit; the threshold is the intervention limit, EN 13848-5)
-        is tamped with it [-]; default 0.8, illustrative (1: only the segments due).
+        is tamped with it [-]; default 0.9, illustrative (1: only the segments due).
     max_tampings : int
         Tampings of a segment before its ballast is renewed [-]; default 6, illustrative.
     recovery_offset_mm, recovery_slope : float
@@ -145,7 +145,7 @@ class MaintenanceOptions(Strict):
     interval_mgt: PositiveFloat | None = None
     min_interval_mgt: NonNegativeFloat = 5.0
     neighbours: NonNegativeInt = 0
-    alert_fraction: float = Field(0.8, gt=0.0, le=1.0)
+    alert_fraction: float = Field(0.9, gt=0.0, le=1.0)
     max_tampings: PositiveInt = 6
     recovery_offset_mm: NonNegativeFloat = 0.6
     recovery_slope: float = Field(0.3, ge=0.0, le=1.0)
