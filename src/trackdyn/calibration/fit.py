@@ -92,6 +92,9 @@ MAD_SCALE = 1.4826
 class Objective:
     """Residuals and Jacobian of a calibration, model runs cached by point.
 
+    A misfit evaluation runs the point's forward-difference neighbours with it, in one
+    batch, when there is more than one worker; in one process they wait for `jac`.
+
     Parameters
     ----------
     problem : Calibration
@@ -106,9 +109,6 @@ class Objective:
         Residuals [mm] of a run (a Dataset); default `residuals` of its `compare`.
     chord : bool
         Keep the first Jacobian (chord iterations): later evaluations run their point only.
-
-    A misfit evaluation runs the point's forward-difference neighbours with it (one
-    batch) when the batch has more than one worker; serially they wait for `jac`.
     """
 
     def __init__(self, problem: Calibration, workers=None, scheduler=None, log=None,
