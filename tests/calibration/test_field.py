@@ -17,6 +17,7 @@ from trackdyn.calibration.field import (
     band_matrix,
     estimate,
     evidence,
+    joint_information,
     prior_correlation,
     rail_transfer,
 )
@@ -162,3 +163,21 @@ def test_rail_transfer_follows_long_waves_and_bridges_short_ones():
         expected = k / (k + ei * (2 * np.pi / wavelength) ** 4)
         amplitude = np.max(np.abs((transfer @ wave)[inner])) / np.max(np.abs(wave[inner]))
         assert amplitude == pytest.approx(expected, rel=0.03), wavelength  # discrete supports
+
+
+def test_joint_information_is_the_schur_complement_of_the_joint_hessian():
+    """Against the direct inverse of the Hessian of ``(|r|² + |w|²/λ) / σ²`` over the
+    parameters and the field together: the parameters' block of its inverse (linear
+    algebra, no approximation)."""
+    rng = np.random.default_rng(3)
+    j, g = rng.standard_normal((60, 2)), rng.standard_normal((60, 25))
+    lam, sigma2 = 0.7, 0.04
+    full = np.block([[j.T @ j, j.T @ g], [g.T @ j, g.T @ g + np.eye(25) / lam]]) / sigma2
+    direct = np.linalg.inv(full)[:2, :2]
+    np.testing.assert_allclose(np.linalg.inv(joint_information(j, g, lam, sigma2)), direct,
+                               rtol=1e-10)  # fmt: skip
+    # a field coordinate that mimics a parameter exactly: the surveys see only their sum, so
+    # the parameter is known no better than that coordinate's prior variance λσ²
+    g[:, 0] = j[:, 0]
+    mimicked = np.linalg.inv(joint_information(j, g, lam, sigma2))
+    assert mimicked[0, 0] >= lam * sigma2 > 10 * np.linalg.inv(j.T @ j / sigma2)[0, 0]

@@ -318,3 +318,30 @@ def estimate(lin: Linearised, prior: Prior, position, observed, lam: float,
     factor = np.exp(u)
     return FieldEstimate(position, factor, factor * se, u, observed,
                          float(np.sqrt(sigma2 * lam)), float(np.sqrt(sigma2)))  # fmt: skip
+
+
+def joint_information(j, g, lam: float, sigma2: float) -> np.ndarray:
+    """Fisher information of global parameters fitted with the field, the field's
+    uncertainty included, (parameters, parameters).
+
+    With ``J`` the residuals' Jacobian in the parameters and ``G = A R`` the one in the
+    field's coordinates ``w`` (``u = R w``, ``w ~ N(0, λσ² I)``), the Hessian of
+    ``(|r|² + |w|²/λ) / σ²`` has the parameters' block ``JᵀJ/σ²`` coupled to the field's
+    ``(GᵀG + I/λ)/σ²``; the parameters' information is its Schur complement,
+    ``Jᵀ (I + λ G Gᵀ)⁻¹ J / σ²`` (Woodbury): less than ``JᵀJ/σ²`` in every direction the
+    field can mimic. Its inverse is the covariance of the parameters with the field
+    integrated out, at the strength ``λ``.
+
+    Parameters
+    ----------
+    j : ndarray
+        (residuals, parameters) Jacobian in the parameters [mm per unit].
+    g : ndarray
+        (residuals, field coordinates) Jacobian in ``w`` [mm].
+    lam : float
+        ``λ = τ²/σ²`` [1/mm²].
+    sigma2 : float
+        ``σ²`` [mm²].
+    """
+    spread = np.eye(j.shape[0]) + lam * (g @ g.T)
+    return j.T @ np.linalg.solve(spread, j) / sigma2

@@ -59,6 +59,11 @@ def calibrate(calibration, out, overwrite: bool, workers, scheduler, console) ->
         result = fit(problem, workers=workers, scheduler=scheduler, log=console.print)
         table = write_calibration(problem, result, stage, str(calibration))
     console.print(fitted_table(spec.settlement.law, fit_table(problem, result), result.runs))
+    for i, j in zip(*np.triu_indices(len(problem.names), 1), strict=True):
+        console.print(
+            f"{problem.names[i]} and {problem.names[j]}: errors correlated "
+            f"{result.correlation[i, j]:+.2f}"
+        )
     if result.field is not None:
         f = result.field
         console.print(
