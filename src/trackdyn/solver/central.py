@@ -133,6 +133,36 @@ def wedge_step(dw_idx, dw_val, H, jinv, wedge, z, q1, inv2dt, max_iter,
 
 
 @njit(cache=True, inline="always")
+def vehicle_step(p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dw_idx, dw_val, H, jinv,
+                 wedge, z, fc, inv2dt, max_iter, q1, vfree, rhs, v, f_up, f_down, F,
+                 state):  # fmt: skip
+    """The vehicle's next displacement ``q1`` from ``z = [q0, q-1]`` and the contact forces
+    ``fc``: ``P z - Gc^T fc``, then the wedge forces (`wedge_step`) and ``- Gw^T F``.
+    Returns False if the wedges' Newton iteration did not converge."""
+    n = p_idx.shape[0]
+    for i in range(n):
+        acc = 0.0
+        for j in range(p_idx.shape[1]):
+            acc += p_val[i, j] * z[p_idx[i, j]]
+        q1[i] = acc
+    for c in range(gc_idx.shape[0]):
+        f = fc[c]
+        for j in range(gc_idx.shape[1]):
+            q1[gc_idx[c, j]] -= gc_val[c, j] * f
+    nw = dw_idx.shape[0]
+    if nw > 0 and not wedge_step(
+        dw_idx, dw_val, H, jinv, wedge, z, q1, inv2dt, max_iter,
+        vfree, rhs, v, f_up, f_down, F, state,
+    ):  # fmt: skip
+        return False
+    for w in range(nw):
+        f = F[w]
+        for j in range(gw_idx.shape[1]):
+            q1[gw_idx[w, j]] -= gw_val[w, j] * f
+    return True
+
+
+@njit(cache=True, inline="always")
 def store_vehicle(z, q1, F, v, ds_idx, ds_val, inv2dt, invdt2, row,
                   out_q, out_v, out_a, out_secondary, out_fw, out_vw):  # fmt: skip
     """Write the step's displacement, velocity, acceleration, secondary displacement and
@@ -204,25 +234,11 @@ def advance(
                 fc[c] -= static_load
             else:
                 fc[c] = k_in[s, c] * (x - r_in[s, c])
-        # q1 without the wedge forces
-        for i in range(n):
-            acc = 0.0
-            for j in range(p_idx.shape[1]):
-                acc += p_val[i, j] * z[p_idx[i, j]]
-            q1[i] = acc
-        for c in range(nc):
-            f = fc[c]
-            for j in range(gc_idx.shape[1]):
-                q1[gc_idx[c, j]] -= gc_val[c, j] * f
-        if nw > 0 and not wedge_step(
-            dw_idx, dw_val, H, jinv, wedge, z, q1, inv2dt, max_iter,
-            vfree, rhs, v, f_up, f_down, F, state,
+        if not vehicle_step(
+            p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dw_idx, dw_val, H, jinv, wedge,
+            z, fc, inv2dt, max_iter, q1, vfree, rhs, v, f_up, f_down, F, state,
         ):  # fmt: skip
             return NEWTON_FAILED, s
-        for w in range(nw):
-            f = F[w]
-            for j in range(gw_idx.shape[1]):
-                q1[gw_idx[w, j]] -= gw_val[w, j] * f
         if to_store == 0:
             to_store = store_every
             if not store_vehicle(
