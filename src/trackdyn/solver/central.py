@@ -65,6 +65,15 @@ DONE, NEWTON_FAILED, NOT_FINITE, NOT_STARTED = 0, 1, 2, 3
 displacement not finite. `advance_batch` leaves runs in any state but `DONE` alone
 (`NOT_STARTED`: no start state)."""
 
+LANES = 8
+"""Runs of one model in one group of the vector lanes: a compile-time constant, so that
+each loop over the lanes is a fixed number of vector instructions (8 doubles fill an
+AVX-512 register)."""
+
+FASTMATH = {"nnan", "ninf", "nsz", "contract", "afn"}
+"""LLVM's fast-math flags of the loops: all but reassociation, so that a run's sums are
+done in the same order alone and in the lanes (the same results, to the bit)."""
+
 _EXPONENT = 0x7FF0000000000000
 """Exponent bits of a float64, all set for inf and NaN (a test that ``fastmath`` keeps)."""
 
@@ -186,7 +195,7 @@ def store_vehicle(z, q1, F, v, ds_idx, ds_val, inv2dt, invdt2, row,
     return True
 
 
-@njit(cache=True, fastmath=True, error_model="numpy")
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy")
 def advance(
     p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dc_idx, dc_val, dw_idx, dw_val,
     ds_idx, ds_val, H, jinv, wedge, contact, static_load,
@@ -261,36 +270,200 @@ def advance(
     return DONE, -1
 
 
-@njit(cache=True, parallel=True, nogil=True)
-def advance_batch(
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy", nogil=True)
+def advance_lanes(
     p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dc_idx, dc_val, dw_idx, dw_val,
     ds_idx, ds_val, H, jinv, wedge, contact, static_load,
-    k_in, r_in, table, y_start, y_step, in_start,
+    k_in, r_in, table, y_start, y_step, count,
     z, dt, step0, store_every, max_iter, row0,
     out_q, out_v, out_a, out_wl, out_secondary, out_fw, out_vw, out_k, out_r, status,
 ):  # fmt: skip
-    """`advance` for a batch of runs, in parallel over the runs.
+    """`advance` for ``L`` runs of one model side by side in the vector lanes.
 
-    Every array of `StepMatrices` and ``static_load, y_start, y_step, z, dt, step0,
-    store_every`` carry a leading run axis; the inputs of run ``b`` are the rows
-    ``in_start[b]:in_start[b + 1]`` of ``k_in``, ``r_in`` (and ``table``), its stored
-    steps go to the output rows from ``row0[b]`` on. A run whose ``status[b, 0]`` is not
-    `DONE` has stopped and is left alone; the others get there the pair `advance` returns.
+    Every array of a run carries the lane axis last (``z`` is (2n, L), ``p_val`` (n,
+    width, L), ``k_in`` (steps, contacts, L), ``table`` (steps, contacts, L, grid), ...);
+    the sparse rows' column indices are the model's, shared. Lane ``b`` advances
+    ``count[b]`` steps; every operation of a step is done for all lanes, stick/slip and
+    the end of a run as selects on each lane's own mask, so that the lanes share every
+    instruction. The Newton iteration goes on while a running lane's states change; a lane
+    whose iteration fails or whose stored displacement is not finite stops (its
+    ``status`` row gets what `advance` would return) and is left as it is while the
+    others go on. Its stored steps go to the output rows from ``row0[b]`` on; a lane whose
+    ``status[b, 0]`` is not `DONE` is left alone.
     """
-    for b in prange(z.shape[0]):
-        if status[b, 0] == DONE:
-            lo, hi = in_start[b], in_start[b + 1]
-            tab = table[lo:hi] if table.shape[0] > 0 else table
-            r0 = row0[b]
-            status[b, 0], status[b, 1] = advance(
-                p_idx[b], p_val[b], gc_idx[b], gc_val[b], gw_idx[b], gw_val[b], dc_idx[b],
-                dc_val[b], dw_idx[b], dw_val[b], ds_idx[b], ds_val[b], H[b], jinv[b],
-                wedge[b], contact[b], static_load[b],
-                k_in[lo:hi], r_in[lo:hi], tab, y_start[b], y_step[b],
-                z[b], dt[b], step0[b], store_every[b], max_iter,
-                out_q[r0:], out_v[r0:], out_a[r0:], out_wl[r0:], out_secondary[r0:], out_fw[r0:],
-                out_vw[r0:], out_k[r0:], out_r[r0:],
-            )  # fmt: skip
+    n = p_idx.shape[0]
+    nc = dc_idx.shape[0]
+    nw = dw_idx.shape[0]
+    lanes = z.shape[1]
+    nonlinear = table.shape[0] > 0
+    inv2dt = 0.5 / dt
+    invdt2 = 1.0 / (dt * dt)
+    q1 = np.empty((n, lanes))
+    fc = np.empty((nc, lanes))
+    vfree = np.empty((nw, lanes))
+    rhs = np.empty((nw, lanes))
+    v = np.zeros((nw, lanes))
+    f_up = np.empty((nw, lanes))
+    f_down = np.empty((nw, lanes))
+    F = np.zeros((nw, lanes))
+    state = np.zeros((nw, lanes), np.int64)  # 0 stick, 1 slip in compression, 2 in extension
+    mask = np.empty(lanes, np.int64)
+    changed = np.empty(lanes, np.int64)
+    run = np.empty(lanes, np.bool_)
+    stored = np.zeros(lanes, np.int64)
+    to_store = -step0 % store_every
+    z_bits = z.view(np.int64)
+    for s in range(count.max()):
+        for b in range(lanes):
+            run[b] = status[b, 0] == DONE and s < count[b]
+        for c in range(nc):
+            for b in range(lanes):
+                fc[c, b] = 0.0
+            for j in range(dc_idx.shape[1]):
+                col = dc_idx[c, j]
+                for b in range(lanes):
+                    fc[c, b] += dc_val[c, j, b] * z[col, b]
+            if nonlinear:
+                for b in range(lanes):
+                    x = fc[c, b] - r_in[s, c, b]
+                    fc[c, b] = contact_table_force(table[s, c, b], y_start[b], y_step[b], x)
+                    fc[c, b] -= static_load[b]
+            else:
+                for b in range(lanes):
+                    fc[c, b] = k_in[s, c, b] * (fc[c, b] - r_in[s, c, b])
+        # q1 without the wedge forces
+        for i in range(n):
+            for b in range(lanes):
+                q1[i, b] = 0.0
+            for j in range(p_idx.shape[1]):
+                col = p_idx[i, j]
+                for b in range(lanes):
+                    q1[i, b] += p_val[i, j, b] * z[col, b]
+        for c in range(nc):
+            for j in range(gc_idx.shape[1]):
+                row = gc_idx[c, j]
+                for b in range(lanes):
+                    q1[row, b] -= gc_val[c, j, b] * fc[c, b]
+        if nw > 0:
+            # the wedges: free velocities and slip forces (`wedge_step`), then Newton
+            for w in range(nw):
+                for b in range(lanes):
+                    f_up[w, b] = 0.0  # here the displacement across the wedge
+                    vfree[w, b] = 0.0
+                for j in range(dw_idx.shape[1]):
+                    col = dw_idx[w, j]
+                    for b in range(lanes):
+                        f_up[w, b] += dw_val[w, j, b] * z[col, b]
+                        vfree[w, b] += dw_val[w, j, b] * (q1[col, b] - z[n + col, b])
+                for b in range(lanes):
+                    vfree[w, b] *= inv2dt[b]
+                    normal = wedge[w, 0, b] + f_up[w, b]
+                    normal = 0.0 if normal < 0.0 else normal
+                    f_up[w, b] = normal * wedge[w, 1, b]
+                    f_down[w, b] = normal * wedge[w, 2, b]
+            for b in range(lanes):
+                changed[b] = 1
+            for _ in range(max_iter):
+                for b in range(lanes):
+                    mask[b] = 0
+                for w in range(nw):
+                    for b in range(lanes):
+                        st = state[w, b]
+                        F[w, b] = 0.0 if st == 0 else (f_up[w, b] if st == 1 else -f_down[w, b])
+                        mask[b] += (1 << w) if st == 0 else 0
+                for w in range(nw):
+                    for b in range(lanes):
+                        rhs[w, b] = vfree[w, b]
+                    for u in range(nw):
+                        for b in range(lanes):
+                            rhs[w, b] -= H[w, u, b] * F[u, b]
+                for b in range(lanes):
+                    changed[b] = 0
+                for w in range(nw):
+                    for b in range(lanes):
+                        v[w, b] = 0.0
+                    for u in range(nw):
+                        for b in range(lanes):
+                            v[w, b] += jinv[mask[b], w, u, b] * rhs[u, b]
+                    for b in range(lanes):
+                        f = wedge[w, 3, b] * v[w, b]
+                        new = 1 if f > f_up[w, b] else (2 if f < -f_down[w, b] else 0)
+                        changed[b] |= new != state[w, b]
+                        state[w, b] = new
+                pending = 0
+                for b in range(lanes):
+                    pending += changed[b] if run[b] else 0
+                if pending == 0:
+                    break
+            for b in range(lanes):
+                if run[b] and changed[b]:
+                    status[b, 0], status[b, 1] = NEWTON_FAILED, s
+                    run[b] = False
+            for w in range(nw):
+                for b in range(lanes):
+                    F[w, b] = wedge[w, 3, b] * v[w, b] if state[w, b] == 0 else F[w, b]
+                for j in range(gw_idx.shape[1]):
+                    row = gw_idx[w, j]
+                    for b in range(lanes):
+                        q1[row, b] -= gw_val[w, j, b] * F[w, b]
+        for b in range(lanes):
+            if run[b] and to_store[b] == 0:
+                to_store[b] = store_every[b]
+                for i in range(n):
+                    if z_bits[i, b] & _EXPONENT == _EXPONENT:
+                        status[b, 0], status[b, 1] = NOT_FINITE, s
+                        run[b] = False
+                if not run[b]:
+                    continue
+                row = row0[b] + stored[b]
+                for i in range(n):
+                    out_q[row, i] = z[i, b]
+                    out_v[row, i] = (q1[i, b] - z[n + i, b]) * inv2dt[b]
+                    out_a[row, i] = (q1[i, b] - 2.0 * z[i, b] + z[n + i, b]) * invdt2[b]
+                for u in range(ds_idx.shape[0]):
+                    d = 0.0
+                    for j in range(ds_idx.shape[1]):
+                        d += ds_val[u, j, b] * z[ds_idx[u, j], b]
+                    out_secondary[row, u] = d
+                for w in range(nw):
+                    out_fw[row, w] = F[w, b]
+                    out_vw[row, w] = v[w, b]
+                for c in range(nc):
+                    dv = 0.0
+                    for j in range(dc_idx.shape[1]):
+                        dv += dc_val[c, j, b] * out_v[row, dc_idx[c, j]]
+                    out_wl[row, c] = (
+                        static_load[b] + (fc[c, b] + contact[c, 0, b] * dv) / contact[c, 1, b]
+                    )
+                    out_k[row, c] = k_in[s, c, b]
+                    out_r[row, c] = r_in[s, c, b]
+                stored[b] += 1
+            to_store[b] -= 1
+        for i in range(n):
+            for b in range(lanes):
+                z[n + i, b] = z[i, b] if run[b] else z[n + i, b]
+                z[i, b] = q1[i, b] if run[b] else z[i, b]
+
+
+@njit(cache=True, parallel=True, nogil=True)
+def advance_groups(
+    p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dc_idx, dc_val, dw_idx, dw_val,
+    ds_idx, ds_val, H, jinv, wedge, contact, static_load,
+    k_in, r_in, table, y_start, y_step, count,
+    z, dt, step0, store_every, max_iter, row0,
+    out_q, out_v, out_a, out_wl, out_secondary, out_fw, out_vw, out_k, out_r, status,
+):  # fmt: skip
+    """`advance_lanes` for groups of lanes, in parallel over the groups: every array of
+    `advance_lanes` but the sparse rows' indices and the outputs carries a leading group
+    axis."""
+    for g in prange(z.shape[0]):
+        advance_lanes(
+            p_idx, p_val[g], gc_idx, gc_val[g], gw_idx, gw_val[g], dc_idx, dc_val[g], dw_idx,
+            dw_val[g], ds_idx, ds_val[g], H[g], jinv[g], wedge[g], contact[g], static_load[g],
+            k_in[g], r_in[g], table[g], y_start[g], y_step[g], count[g],
+            z[g], dt[g], step0, store_every[g], max_iter, row0[g],
+            out_q, out_v, out_a, out_wl, out_secondary, out_fw, out_vw, out_k, out_r, status[g],
+        )  # fmt: skip
 
 
 def start_state(p: Problem, wedge) -> np.ndarray:
@@ -308,17 +481,20 @@ def start_state(p: Problem, wedge) -> np.ndarray:
 
 
 def _sparse_rows(D):
-    """Column indices and values of the nonzeros of each row of ``D``, zero-padded.
+    """Column indices of the nonzeros of each row of the matrices ``D`` (runs, rows,
+    columns), zero-padded, and the runs' values there (runs, rows, width).
 
     The models' matrices are mostly zeros (``A`` is block diagonal: no damper crosses the
-    secondary suspension), so the loop runs over nonzeros only.
+    secondary suspension), so the loop runs over nonzeros only; the columns are those
+    where any run has a nonzero (the runs of a batch share them).
     """
-    width = max(1, int((D != 0).sum(axis=1).max())) if D.size else 1
-    idx = np.zeros((D.shape[0], width), np.int64)
-    val = np.zeros((D.shape[0], width))
-    for r, row in enumerate(D):
+    nonzero = (D != 0).any(axis=0)
+    width = max(1, int(nonzero.sum(axis=1).max())) if nonzero.size else 1
+    idx = np.zeros((D.shape[1], width), np.int64)
+    val = np.zeros((D.shape[0], D.shape[1], width))
+    for r, row in enumerate(nonzero):
         nz = np.flatnonzero(row)
-        idx[r, : nz.size], val[r, : nz.size] = nz, row[nz]
+        idx[r, : nz.size], val[:, r, : nz.size] = nz, D[:, r, nz]
     return idx, val
 
 
@@ -343,18 +519,9 @@ class StepMatrices(NamedTuple):
     contact: np.ndarray
 
 
-def step_matrices(model, dt) -> StepMatrices:
-    """Constant arrays of the scheme for `advance`, from a `Model` and the step [s].
-
-    The sparse rows (`_sparse_rows`) of ``P = [A^-1 (2M/Δt² - K), -A^-1 (M/Δt² - C/(2Δt))]``
-    acting on ``[q0, q-1]``, of ``Gc^T`` and ``Gw^T`` with ``Gc = A^-1 Dc^T`` and
-    ``Gw = A^-1 Dw^T``, and of ``Dc``, ``Dw`` and ``Ds``; ``H``; the inverses of
-    ``I + H diag(C_slope·stick)`` for every stick/slip combination; per wedge
-    ``x_ss [m]``, the slip force per unit spring
-    compression in compression and in extension ``k_ss μ / (tan α_w ∓ μ)`` [N/m], and
-    ``C_slope`` [N s/m] (`wedge_table`); per contact the track damping [N s/m] and its
-    number of axles (`contact_table`).
-    """
+def _scheme(model, dt) -> tuple[list, list]:
+    """The dense matrices of `step_matrices` (``P``, ``Gc^T``, ``Gw^T``, ``Dc``, ``Dw``,
+    ``Ds``) and its other arrays (``H``, the inverses, the wedge and contact tables)."""
     M, C, K, Dc, Dw = model.M, model.C, model.K, model.Dc, model.Dw
     A = M / dt**2 + C / (2 * dt)
     Ainv = np.linalg.inv(A)
@@ -368,22 +535,47 @@ def step_matrices(model, dt) -> StepMatrices:
     for mask in range(2**nw):
         stick = np.array([(mask >> w) & 1 for w in range(nw)], dtype=float)
         jinv[mask] = np.linalg.inv(np.eye(nw) + H * (c_slope * stick)[None, :])
-    sparse = [_sparse_rows(x) for x in (P, (Ainv @ Dc.T).T, Gw.T, Dc, Dw, model.Ds)]
+    dense = [P, (Ainv @ Dc.T).T, Gw.T, Dc, Dw, model.Ds]
+    return dense, [H, jinv, wedge, contact_table(model)]
+
+
+def _run_matrices(schemes) -> StepMatrices:
+    """`StepMatrices` of runs of one model from their `_scheme` s: the sparse rows' indices
+    shared, every other array with a leading run axis."""
+    dense, rest = zip(*schemes, strict=True)
+    sparse = [_sparse_rows(np.stack(d)) for d in zip(*dense, strict=True)]
     pairs = (a for pair in sparse for a in pair)
-    return StepMatrices._make([*pairs, H, jinv, wedge, contact_table(model)])
+    return StepMatrices._make([*pairs, *(np.stack(r) for r in zip(*rest, strict=True))])
 
 
-def _stack(arrays):
-    """Arrays of the runs along a new first axis, zero-padded to the widest."""
-    shape = np.max([a.shape for a in arrays], axis=0)
-    out = np.zeros((len(arrays), *shape), arrays[0].dtype)
-    for b, a in enumerate(arrays):
-        out[(b, *(slice(0, s) for s in a.shape))] = a
-    return out
+def step_matrices(model, dt) -> StepMatrices:
+    """Constant arrays of the scheme for `advance`, from a `Model` and the step [s].
+
+    The sparse rows (`_sparse_rows`) of ``P = [A^-1 (2M/Δt² - K), -A^-1 (M/Δt² - C/(2Δt))]``
+    acting on ``[q0, q-1]``, of ``Gc^T`` and ``Gw^T`` with ``Gc = A^-1 Dc^T`` and
+    ``Gw = A^-1 Dw^T``, and of ``Dc``, ``Dw`` and ``Ds``; ``H``; the inverses of
+    ``I + H diag(C_slope·stick)`` for every stick/slip combination; per wedge
+    ``x_ss [m]``, the slip force per unit spring
+    compression in compression and in extension ``k_ss μ / (tan α_w ∓ μ)`` [N/m], and
+    ``C_slope`` [N s/m] (`wedge_table`); per contact the track damping [N s/m] and its
+    number of axles (`contact_table`).
+    """
+    m = _run_matrices([_scheme(model, dt)])
+    return StepMatrices._make(a if f.endswith("_idx") else a[0] for f, a in m._asdict().items())
+
+
+def _lanes(a, take):
+    """Per-run array ``a`` (runs, ...) in the lanes: (groups, ..., lanes) for the runs
+    ``take`` (groups, lanes)."""
+    return np.ascontiguousarray(np.moveaxis(a[take], 1, -1))
 
 
 def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> list:
     """Integrate runs of one model side by side: one compiled call per block of steps.
+
+    A run alone goes through `advance`; several go through `advance_groups`, in groups of
+    at most `LANES` runs side by side in the vector lanes (groups of equal size, in
+    parallel over the groups).
 
     Parameters
     ----------
@@ -402,64 +594,86 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> 
         Per run, a dict of the `OUTPUTS` arrays, or the `TrackdynInputError` that
         stopped it.
     """
-    mats = [step_matrices(p.model, p.dt) for p in problems]
-    stacked = StepMatrices(*(_stack(list(f)) for f in zip(*mats, strict=True)))
-    errors: list = [None] * len(problems)
-    status = np.zeros((len(problems), 2), np.int64)  # DONE: running
-    z = np.zeros((len(problems), 2 * len(problems[0].model.dof_names)))
-    for b, (p, m) in enumerate(zip(problems, mats, strict=True)):
+    runs = len(problems)
+    n_groups = -(-runs // LANES)
+    lanes = -(-runs // n_groups)
+    take = np.minimum(np.arange(n_groups * lanes), runs - 1).reshape(n_groups, lanes)
+    mats = _run_matrices([_scheme(p.model, p.dt) for p in problems])
+    lane_mats = {f: a if f.endswith("_idx") else _lanes(a, take) for f, a in mats._asdict().items()}
+    errors: list = [None] * runs
+    status = np.full((n_groups * lanes, 2), NOT_STARTED, np.int64)
+    status[:runs, 0] = DONE  # running
+    z = np.zeros((runs, 2 * len(problems[0].model.dof_names)))
+    for b, p in enumerate(problems):
         try:
-            z[b] = start_state(p, m.wedge)
+            z[b] = start_state(p, mats.wedge[b])
         except TrackdynInputError as exc:
             errors[b], status[b, 0] = exc, NOT_STARTED
+    status = status.reshape(n_groups, lanes, 2)
+    z = _lanes(z, take)
     rows = np.cumsum([0] + [p.n_store for p in problems])
     flat = {name: np.empty((rows[-1], w)) for name, w in widths(problems[0].model).items()}
     every = np.array([p.store_every for p in problems])
     y_start, y_step = np.array([table_step(track_input(p).grid) for p in problems]).T
     static = np.array([p.model.static_wheel_load for p in problems])
     dts = np.array([p.dt for p in problems])
-    step_bytes = 8 * len(problems[0].model.contact_names) * (2 + track_input(problems[0]).grid.size)
-    block = max(1, min(CHUNK_STEPS, CHUNK_BYTES // step_bytes // len(problems)))
+    nc, grid = len(problems[0].model.contact_names), track_input(problems[0]).grid.size
+    step_bytes = 8 * nc * (2 + grid)
+    block = max(1, min(CHUNK_STEPS, CHUNK_BYTES // step_bytes // runs))
     firsts = range(0, max(p.n_steps for p in problems), block)
 
     def sample(first):
-        """Track input of the block of steps from ``first`` on (none for stopped runs)."""
-        counts = [
-            0 if status[b, 0] != DONE else max(min(block, p.n_steps - first), 0)
-            for b, p in enumerate(problems)
-        ]
-        sampled = [
-            p.inputs(p.centre0 + p.speed * p.dt * np.arange(first, first + n))
-            for p, n in zip(problems, counts, strict=True)
-        ]
-        k, r, table = (np.concatenate(a) for a in zip(*sampled, strict=True))
-        return k, r, table, np.cumsum([0, *counts])
+        """Track input of the block of steps from ``first`` on, in the lanes (none for
+        stopped runs), and each lane's number of steps."""
+        count = np.zeros(n_groups * lanes, np.int64)
+        for b, p in enumerate(problems):
+            if status.reshape(-1, 2)[b, 0] == DONE:
+                count[b] = max(min(block, p.n_steps - first), 0)
+        shape = (n_groups, int(count.max()), nc, lanes)
+        k, r = np.zeros(shape), np.zeros(shape)
+        table = np.zeros((*shape, grid) if grid else (n_groups, 0, nc, lanes, 0))
+        for b in np.flatnonzero(count).tolist():
+            p, g, lane = problems[b], b // lanes, b % lanes
+            x = p.centre0 + p.speed * p.dt * np.arange(first, first + count[b])
+            k[g, : count[b], :, lane], r[g, : count[b], :, lane], tb = p.inputs(x)
+            if grid:
+                table[g, : count[b], :, lane] = tb
+        return k, r, table, count.reshape(n_groups, lanes)
 
     # the next block's input is sampled in a thread while the compiled loop (which
     # releases the GIL) advances this one
     with ThreadPoolExecutor(max_workers=1) as pool:
         ahead = pool.submit(sample, 0)
         for first in firsts:
-            k, r, table, in_start = ahead.result()
+            k, r, table, count = ahead.result()
             if first + block < firsts.stop:
                 ahead = pool.submit(sample, first + block)
-            advance_batch(
-                *stacked, static, k, r, table, y_start, y_step, in_start,
-                z, dts, np.full(len(problems), first), every,
-                newton_max_iter, rows[:-1] + (first + every - 1) // every,
-                *[*flat.values(), status],
-            )  # fmt: skip
-            for b in np.flatnonzero(
-                (status[:, 0] != DONE) & (status[:, 0] != NOT_STARTED)
-            ).tolist():
-                if errors[b] is None:
-                    stop = failure if status[b, 0] == NEWTON_FAILED else non_finite
-                    errors[b] = stop(problems[b], first + int(status[b, 1]))
+            row0 = rows[:-1] + (first + every - 1) // every
+            if runs == 1:  # the run's own arrays: views of its lane
+                if status[0, 0, 0] == DONE:
+                    status[0, 0] = advance(
+                        *(a if f.endswith("_idx") else a[0, ..., 0] for f, a in lane_mats.items()),
+                        static[0], k[0, ..., 0], r[0, ..., 0], table[0, :, :, 0], y_start[0],
+                        y_step[0], z[0, :, 0], dts[0], first, every[0], newton_max_iter,
+                        *(a[row0[0] :] for a in flat.values()),
+                    )  # fmt: skip
+            else:
+                advance_groups(
+                    *lane_mats.values(), _lanes(static, take), k, r, table,
+                    _lanes(y_start, take), _lanes(y_step, take), count, z, _lanes(dts, take),
+                    first, _lanes(every, take), newton_max_iter, _lanes(row0, take),
+                    *[*flat.values(), status],
+                )  # fmt: skip
+            for b in range(runs):
+                code, at = status.reshape(-1, 2)[b]
+                if code in (NEWTON_FAILED, NOT_FINITE) and errors[b] is None:
+                    stop = failure if code == NEWTON_FAILED else non_finite
+                    errors[b] = stop(problems[b], first + int(at))
             if advanced is not None:
-                advanced(int(in_start[-1]))
+                advanced(int(count.sum()))
     return [
         errors[b] or {name: a[rows[b] : rows[b + 1]] for name, a in flat.items()}
-        for b in range(len(problems))
+        for b in range(runs)
     ]
 
 
