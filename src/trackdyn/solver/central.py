@@ -539,10 +539,10 @@ def _scheme(model, dt) -> tuple[list, list]:
     return dense, [H, jinv, wedge, contact_table(model)]
 
 
-def _run_matrices(schemes) -> StepMatrices:
-    """`StepMatrices` of runs of one model from their `_scheme` s: the sparse rows' indices
-    shared, every other array with a leading run axis."""
-    dense, rest = zip(*schemes, strict=True)
+def run_matrices(models, dts) -> StepMatrices:
+    """`StepMatrices` of runs of one model (`step_matrices` of each): the sparse rows'
+    indices shared, every other array with a leading run axis."""
+    dense, rest = zip(*(_scheme(m, dt) for m, dt in zip(models, dts, strict=True)), strict=True)
     sparse = [_sparse_rows(np.stack(d)) for d in zip(*dense, strict=True)]
     pairs = (a for pair in sparse for a in pair)
     return StepMatrices._make([*pairs, *(np.stack(r) for r in zip(*rest, strict=True))])
@@ -560,13 +560,21 @@ def step_matrices(model, dt) -> StepMatrices:
     ``C_slope`` [N s/m] (`wedge_table`); per contact the track damping [N s/m] and its
     number of axles (`contact_table`).
     """
-    m = _run_matrices([_scheme(model, dt)])
+    m = run_matrices([model], [dt])
     return StepMatrices._make(a if f.endswith("_idx") else a[0] for f, a in m._asdict().items())
 
 
-def _lanes(a, take):
+def lane_groups(runs: int) -> np.ndarray:
+    """The run in each lane of each group, (groups, lanes): as few groups as `LANES`
+    allows, of equal size; the lanes left over in the last group repeat its last run."""
+    n_groups = -(-runs // LANES)
+    lanes = -(-runs // n_groups)
+    return np.minimum(np.arange(n_groups * lanes), runs - 1).reshape(n_groups, lanes)
+
+
+def in_lanes(a, take):
     """Per-run array ``a`` (runs, ...) in the lanes: (groups, ..., lanes) for the runs
-    ``take`` (groups, lanes)."""
+    ``take`` (`lane_groups`)."""
     return np.ascontiguousarray(np.moveaxis(a[take], 1, -1))
 
 
@@ -595,11 +603,12 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> 
         stopped it.
     """
     runs = len(problems)
-    n_groups = -(-runs // LANES)
-    lanes = -(-runs // n_groups)
-    take = np.minimum(np.arange(n_groups * lanes), runs - 1).reshape(n_groups, lanes)
-    mats = _run_matrices([_scheme(p.model, p.dt) for p in problems])
-    lane_mats = {f: a if f.endswith("_idx") else _lanes(a, take) for f, a in mats._asdict().items()}
+    take = lane_groups(runs)
+    n_groups, lanes = take.shape
+    mats = run_matrices([p.model for p in problems], [p.dt for p in problems])
+    lane_mats = {
+        f: a if f.endswith("_idx") else in_lanes(a, take) for f, a in mats._asdict().items()
+    }
     errors: list = [None] * runs
     status = np.full((n_groups * lanes, 2), NOT_STARTED, np.int64)
     status[:runs, 0] = DONE  # running
@@ -610,7 +619,7 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> 
         except TrackdynInputError as exc:
             errors[b], status[b, 0] = exc, NOT_STARTED
     status = status.reshape(n_groups, lanes, 2)
-    z = _lanes(z, take)
+    z = in_lanes(z, take)
     rows = np.cumsum([0] + [p.n_store for p in problems])
     flat = {name: np.empty((rows[-1], w)) for name, w in widths(problems[0].model).items()}
     every = np.array([p.store_every for p in problems])
@@ -659,9 +668,10 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> 
                     )  # fmt: skip
             else:
                 advance_groups(
-                    *lane_mats.values(), _lanes(static, take), k, r, table,
-                    _lanes(y_start, take), _lanes(y_step, take), count, z, _lanes(dts, take),
-                    first, _lanes(every, take), newton_max_iter, _lanes(row0, take),
+                    *lane_mats.values(), in_lanes(static, take), k, r, table,
+                    in_lanes(y_start, take), in_lanes(y_step, take), count, z,
+                    in_lanes(dts, take), first, in_lanes(every, take), newton_max_iter,
+                    in_lanes(row0, take),
                     *[*flat.values(), status],
                 )  # fmt: skip
             for b in range(runs):
