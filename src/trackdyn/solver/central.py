@@ -308,6 +308,8 @@ def advance_lanes(
     F = np.zeros((nw, lanes))
     state = np.zeros((nw, lanes), np.int64)  # 0 stick, 1 slip in compression, 2 in extension
     mask = np.empty(lanes, np.int64)
+    jl = np.empty((nw, nw, lanes))  # the inverse of each lane's stick/slip states `held`
+    held = np.full(lanes, -1, np.int64)
     changed = np.empty(lanes, np.int64)
     run = np.empty(lanes, np.bool_)
     stored = np.zeros(lanes, np.int64)
@@ -379,12 +381,17 @@ def advance_lanes(
                             rhs[w, b] -= H[w, u, b] * F[u, b]
                 for b in range(lanes):
                     changed[b] = 0
+                    if held[b] != mask[b]:  # the lane's inverse, where the loop reads it
+                        held[b] = mask[b]
+                        for w in range(nw):
+                            for u in range(nw):
+                                jl[w, u, b] = jinv[mask[b], w, u, b]
                 for w in range(nw):
                     for b in range(lanes):
                         v[w, b] = 0.0
                     for u in range(nw):
                         for b in range(lanes):
-                            v[w, b] += jinv[mask[b], w, u, b] * rhs[u, b]
+                            v[w, b] += jl[w, u, b] * rhs[u, b]
                     for b in range(lanes):
                         f = wedge[w, 3, b] * v[w, b]
                         new = 1 if f > f_up[w, b] else (2 if f < -f_down[w, b] else 0)
