@@ -18,6 +18,14 @@ soon as the states it lands in are the ones it assumed, so the iteration stops t
 starts from the previous step's states and usually needs one solve. The matrices
 ``(I + H diag(C_slope·stick))^-1`` of all ``2^nw`` state combinations are formed once.
 
+A run alone goes through `advance`. Runs of one model go side by side through
+`advance_lanes`: each array carries the runs (lanes) along its last, contiguous axis, so
+that every operation of a step is one loop over the lanes, which the compiler turns into
+vector instructions; a lane's stick/slip states, its Newton iteration and its end are
+selects on its own mask. The sums of each lane are done in `advance`'s order and the loops
+are compiled without reassociation (`FASTMATH`), so a run's results in the lanes are
+those it gives alone, to the bit.
+
 References
 ----------
 Fröhling, R.D. (1997). Deterioration of railway track due to dynamic vehicle loading and
@@ -62,7 +70,7 @@ CHUNK_BYTES = 32 * 2**20
 
 DONE, NEWTON_FAILED, NOT_FINITE, NOT_STARTED = 0, 1, 2, 3
 """How `advance` ends: all steps done; no Newton solution at a step; a stored
-displacement not finite. `advance_batch` leaves runs in any state but `DONE` alone
+displacement not finite. `advance_lanes` leaves runs in any state but `DONE` alone
 (`NOT_STARTED`: no start state)."""
 
 LANES = 8
@@ -195,7 +203,7 @@ def store_vehicle(z, q1, F, v, ds_idx, ds_val, inv2dt, invdt2, row,
     return True
 
 
-@njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy", nogil=True)
 def advance(
     p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dc_idx, dc_val, dw_idx, dw_val,
     ds_idx, ds_val, H, jinv, wedge, contact, static_load,
