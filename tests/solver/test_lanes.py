@@ -1,8 +1,9 @@
 """Runs side by side in the vector lanes give, to the bit, what each run gives alone.
 
-A run alone goes through the per-run loop (`central.advance`), several runs of one model
-through the lanes (`central.advance_lanes`): the same scheme, the same sums in the same
-order, so the stored arrays must be equal bit for bit (not merely close).
+A run alone goes through the per-run loop (`central.advance`), each full group of `LANES`
+runs of one model through the lanes (`central.advance_lanes`): the same scheme, the same
+sums in the same order, so the stored arrays must be equal bit for bit (not merely close).
+The batches here hold a group and a run left over, which goes one by one.
 """
 
 import copy
@@ -40,47 +41,49 @@ def assert_alone(batch, vehicles, tracks, options, newton_max_iter=50):
             np.testing.assert_array_equal(r.out[name], a, err_msg=name)
 
 
+def varied(model, n, **options):
+    """``n`` runs of ``model``: different vehicles, speeds (so different step counts and
+    time steps) and storage."""
+    vehicles = [(V, SOFT, EMPTY)[i % 3] for i in range(n)]
+    every = (1, 3, None)
+    runs = [
+        RunOptions(model=model, speed_kmh=50.0 + 5.0 * i, store_every=every[i % 3], **options)
+        for i in range(n)
+    ]
+    return vehicles, runs
+
+
 @pytest.mark.parametrize("model", MODELS)
 def test_lanes_give_each_run_alone(lin, model):
-    # different vehicles, speeds (so different step counts and time steps) and storage
-    vehicles = [V, SOFT, EMPTY]
-    options = [
-        RunOptions(model=model, speed_kmh=72.0, store_every=1),
-        RunOptions(model=model, speed_kmh=50.0, store_every=3),
-        RunOptions(model=model, speed_kmh=60.0),
-    ]
+    vehicles, options = varied(model, central.LANES + 1)
     batch = run_batch(vehicles, lin, options)
     assert not any(isinstance(r, Exception) for r in batch)
-    assert_alone(batch, vehicles, [lin] * 3, options)
+    assert_alone(batch, vehicles, [lin] * len(batch), options)
 
 
 @pytest.mark.parametrize("model", ["2dof", "full"])
 def test_lanes_on_the_nonlinear_track(lin, model):
-    options = [
-        RunOptions(model=model, speed_kmh=90.0, nonlinear=True, store_every=2),
-        RunOptions(model=model, speed_kmh=70.0, nonlinear=True),
-    ]
-    batch = run_batch([V, SOFT], lin, options)
-    assert_alone(batch, [V, SOFT], [lin] * 2, options)
-
-
-def test_more_runs_than_lanes(lin):
-    # LANES + 1 runs: two groups of lanes side by side
-    n = central.LANES + 1
-    vehicles = [load_vehicle("loaded", kp=V.kp * (0.8 + 0.4 * i / n)) for i in range(n)]
-    options = [RunOptions(model="2dof", speed_kmh=50.0 + 5.0 * i) for i in range(n)]
+    vehicles, options = varied(model, central.LANES + 1, nonlinear=True)
     batch = run_batch(vehicles, lin, options)
-    assert_alone(batch, vehicles, [lin] * n, options)
+    assert_alone(batch, vehicles, [lin] * len(batch), options)
+
+
+def test_two_groups_of_lanes(lin):
+    vehicles, options = varied("2dof", 2 * central.LANES + 1)
+    batch = run_batch(vehicles, lin, options)
+    assert_alone(batch, vehicles, [lin] * len(batch), options)
 
 
 def test_a_lane_whose_newton_fails_stops_alone(lin):
-    # the loaded wagon's wedges fail part way; the sticky ones run on to the end
-    vehicles = [STICKY, V, STICKY]
-    options = [RunOptions(speed_kmh=s, store_every=2) for s in (90.0, 72.0, 60.0)]
+    # the loaded wagon's wedges (runs 1 and 4) fail part way, the sticky ones at some
+    # speeds, later or not at all
+    vehicles = [V if i in (1, 4) else STICKY for i in range(central.LANES)]
+    options = [RunOptions(speed_kmh=50.0 + 5.0 * i, store_every=2) for i in range(central.LANES)]
     batch = run_batch(vehicles, lin, options, newton_max_iter=1)
-    assert isinstance(batch[1], TrackdynInputError)
+    failed = [isinstance(r, TrackdynInputError) for r in batch]
+    assert failed[1] and failed[4] and not all(failed)
     assert "did not converge" in str(batch[1])
-    assert_alone(batch, vehicles, [lin] * 3, options, newton_max_iter=1)
+    assert_alone(batch, vehicles, [lin] * len(batch), options, newton_max_iter=1)
 
 
 def test_a_non_finite_lane_stops_alone(lin, monkeypatch):
@@ -95,9 +98,10 @@ def test_a_non_finite_lane_stops_alone(lin, monkeypatch):
         return k, r, table
 
     monkeypatch.setattr(ContactInput, "__call__", broken)
-    tracks = [lin, bad, lin]
-    options = [RunOptions(speed_kmh=s, store_every=1) for s in (72.0, 60.0, 50.0)]
-    batch = run_batch([V, V, SOFT], tracks, options)
-    assert isinstance(batch[1], TrackdynInputError)
+    vehicles, options = varied("11dof", central.LANES)
+    tracks = [bad if i == 1 else lin for i in range(central.LANES)]
+    batch = run_batch(vehicles, tracks, options)
+    for i, r in enumerate(batch):
+        assert isinstance(r, TrackdynInputError) == (i == 1)
     assert "non-finite displacements" in str(batch[1])
-    assert_alone(batch, [V, V, SOFT], tracks, options)
+    assert_alone(batch, vehicles, tracks, options)

@@ -74,9 +74,10 @@ displacement not finite. `advance_lanes` leaves runs in any state but `DONE` alo
 (`NOT_STARTED`: no start state)."""
 
 LANES = 8
-"""Runs of one model in one group of the vector lanes: a compile-time constant, so that
-each loop over the lanes is a fixed number of vector instructions (8 doubles fill an
-AVX-512 register)."""
+"""Runs of one model in a group of the vector lanes (`advance_lanes`): a compile-time
+constant, so that each loop over the lanes is a fixed number of instructions, without a
+remainder (8 doubles fill an AVX-512 register). Fewer runs than this go one by one
+(`advance_runs`): a group costs as much with fewer lanes filled."""
 
 FASTMATH = {"nnan", "ninf", "nsz", "contract", "afn"}
 """LLVM's fast-math flags of the loops: all but reassociation, so that a run's sums are
@@ -309,7 +310,7 @@ def advance_lanes(
     n = p_idx.shape[0]
     nc = dc_idx.shape[0]
     nw = dw_idx.shape[0]
-    lanes = z.shape[1]
+    lanes = LANES
     nonlinear = table.shape[0] > 0
     inv2dt = 0.5 / dt
     invdt2 = 1.0 / (dt * dt)
@@ -468,6 +469,38 @@ def advance_lanes(
 
 
 @njit(cache=True, parallel=True, nogil=True)
+def advance_runs(
+    p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dc_idx, dc_val, dw_idx, dw_val,
+    ds_idx, ds_val, H, jinv, wedge, contact, static_load,
+    k_in, r_in, table, y_start, y_step, in_start,
+    z, dt, step0, store_every, max_iter, row0,
+    out_q, out_v, out_a, out_wl, out_secondary, out_fw, out_vw, out_k, out_r, status,
+):  # fmt: skip
+    """`advance` for runs one by one, in parallel over the runs.
+
+    The sparse rows' indices are shared; every other array of `StepMatrices` and
+    ``static_load, y_start, y_step, z, dt, store_every, row0`` carry a leading run axis.
+    The inputs of run ``b`` are the rows ``in_start[b]:in_start[b + 1]`` of ``k_in``,
+    ``r_in`` (and ``table``), its stored steps go to the output rows from ``row0[b]`` on.
+    A run whose ``status[b, 0]`` is not `DONE` is left alone; the others get there the
+    pair `advance` returns.
+    """
+    for b in prange(z.shape[0]):
+        if status[b, 0] == DONE:
+            lo, hi = in_start[b], in_start[b + 1]
+            tab = table[lo:hi] if table.shape[0] > 0 else table
+            r0 = row0[b]
+            status[b, 0], status[b, 1] = advance(
+                p_idx, p_val[b], gc_idx, gc_val[b], gw_idx, gw_val[b], dc_idx, dc_val[b],
+                dw_idx, dw_val[b], ds_idx, ds_val[b], H[b], jinv[b], wedge[b], contact[b],
+                static_load[b], k_in[lo:hi], r_in[lo:hi], tab, y_start[b], y_step[b],
+                z[b], dt[b], step0, store_every[b], max_iter,
+                out_q[r0:], out_v[r0:], out_a[r0:], out_wl[r0:], out_secondary[r0:],
+                out_fw[r0:], out_vw[r0:], out_k[r0:], out_r[r0:],
+            )  # fmt: skip
+
+
+@njit(cache=True, parallel=True, nogil=True)
 def advance_groups(
     p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dc_idx, dc_val, dw_idx, dw_val,
     ds_idx, ds_val, H, jinv, wedge, contact, static_load,
@@ -587,11 +620,9 @@ def step_matrices(model, dt) -> StepMatrices:
 
 
 def lane_groups(runs: int) -> np.ndarray:
-    """The run in each lane of each group, (groups, lanes): as few groups as `LANES`
-    allows, of equal size; the lanes left over in the last group repeat its last run."""
-    n_groups = -(-runs // LANES)
-    lanes = -(-runs // n_groups)
-    return np.minimum(np.arange(n_groups * lanes), runs - 1).reshape(n_groups, lanes)
+    """The runs of each group of the lanes, (groups, `LANES`): the first runs, as many
+    full groups as there are; the others go one by one."""
+    return np.arange(runs // LANES * LANES).reshape(-1, LANES)
 
 
 def in_lanes(a, take):
@@ -603,9 +634,9 @@ def in_lanes(a, take):
 def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> list:
     """Integrate runs of one model side by side: one compiled call per block of steps.
 
-    A run alone goes through `advance`; several go through `advance_groups`, in groups of
-    at most `LANES` runs side by side in the vector lanes (groups of equal size, in
-    parallel over the groups).
+    Each full group of `LANES` runs goes through `advance_groups` (side by side in the
+    vector lanes, in parallel over the groups), the runs left over through `advance_runs`
+    (one by one, in parallel over the runs).
 
     Parameters
     ----------
@@ -626,78 +657,87 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> 
     """
     runs = len(problems)
     take = lane_groups(runs)
-    n_groups, lanes = take.shape
+    n_groups, in_groups = take.shape[0], take.size
+    one = slice(in_groups, runs)  # the runs one by one
     mats = run_matrices([p.model for p in problems], [p.dt for p in problems])
-    lane_mats = {
-        f: a if f.endswith("_idx") else in_lanes(a, take) for f, a in mats._asdict().items()
-    }
+    idx = {f for f in mats._fields if f.endswith("_idx")}
+    lane_mats = [a if f in idx else in_lanes(a, take) for f, a in mats._asdict().items()]
+    run_mats = [a if f in idx else a[one] for f, a in mats._asdict().items()]
     errors: list = [None] * runs
-    status = np.full((n_groups * lanes, 2), NOT_STARTED, np.int64)
-    status[:runs, 0] = DONE  # running
+    status = np.zeros((runs, 2), np.int64)  # DONE: running
     z = np.zeros((runs, 2 * len(problems[0].model.dof_names)))
     for b, p in enumerate(problems):
         try:
             z[b] = start_state(p, mats.wedge[b])
         except TrackdynInputError as exc:
             errors[b], status[b, 0] = exc, NOT_STARTED
-    status = status.reshape(n_groups, lanes, 2)
-    z = in_lanes(z, take)
+    lane_z, lane_status = in_lanes(z, take), status[:in_groups].reshape(n_groups, LANES, 2)
     rows = np.cumsum([0] + [p.n_store for p in problems])
     flat = {name: np.empty((rows[-1], w)) for name, w in widths(problems[0].model).items()}
-    every = np.array([p.store_every for p in problems])
-    y_start, y_step = np.array([table_step(track_input(p).grid) for p in problems]).T
-    static = np.array([p.model.static_wheel_load for p in problems])
-    dts = np.array([p.dt for p in problems])
+    per_run = dict(
+        static=np.array([p.model.static_wheel_load for p in problems]),
+        y_start=np.array([table_step(track_input(p).grid)[0] for p in problems]),
+        y_step=np.array([table_step(track_input(p).grid)[1] for p in problems]),
+        dt=np.array([p.dt for p in problems]),
+        every=np.array([p.store_every for p in problems]),
+    )
+    lane = {name: in_lanes(a, take) for name, a in per_run.items()}
     nc, grid = len(problems[0].model.contact_names), track_input(problems[0]).grid.size
     step_bytes = 8 * nc * (2 + grid)
     block = max(1, min(CHUNK_STEPS, CHUNK_BYTES // step_bytes // runs))
     firsts = range(0, max(p.n_steps for p in problems), block)
 
     def sample(first):
-        """Track input of the block of steps from ``first`` on, in the lanes (none for
-        stopped runs), and each lane's number of steps."""
-        count = np.zeros(n_groups * lanes, np.int64)
+        """Track input of the block of steps from ``first`` on (none for stopped runs):
+        in the lanes with each lane's number of steps, and of the runs one by one, one
+        after the other, with where each starts."""
+        count = np.zeros(runs, np.int64)
         for b, p in enumerate(problems):
-            if status.reshape(-1, 2)[b, 0] == DONE:
+            if status[b, 0] == DONE:
                 count[b] = max(min(block, p.n_steps - first), 0)
-        shape = (n_groups, int(count.max()), nc, lanes)
+        shape = (n_groups, int(count[:in_groups].max(initial=0)), nc, LANES)
         k, r = np.zeros(shape), np.zeros(shape)
-        table = np.zeros((*shape, grid) if grid else (n_groups, 0, nc, lanes, 0))
+        table = np.zeros((*shape, grid) if grid else (n_groups, 0, nc, LANES, 0))
+        sampled = []
         for b in np.flatnonzero(count).tolist():
-            p, g, lane = problems[b], b // lanes, b % lanes
+            p = problems[b]
             x = p.centre0 + p.speed * p.dt * np.arange(first, first + count[b])
-            k[g, : count[b], :, lane], r[g, : count[b], :, lane], tb = p.inputs(x)
+            if b >= in_groups:
+                sampled.append(p.inputs(x))
+                continue
+            g, n = b // LANES, count[b]
+            k[g, :n, :, b % LANES], r[g, :n, :, b % LANES], tb = p.inputs(x)
             if grid:
-                table[g, : count[b], :, lane] = tb
-        return k, r, table, count.reshape(n_groups, lanes)
+                table[g, :n, :, b % LANES] = tb
+        empty = (np.zeros((0, nc)), np.zeros((0, nc)), np.zeros((0, nc, grid)))
+        alone = [np.concatenate(a) for a in zip(empty, *sampled, strict=True)]
+        in_start = np.cumsum([0, *count[one]])
+        return (k, r, table, count[:in_groups].reshape(n_groups, LANES)), (*alone, in_start)
 
     # the next block's input is sampled in a thread while the compiled loop (which
     # releases the GIL) advances this one
     with ThreadPoolExecutor(max_workers=1) as pool:
         ahead = pool.submit(sample, 0)
         for first in firsts:
-            k, r, table, count = ahead.result()
+            (k, r, table, count), (k1, r1, table1, in_start) = ahead.result()
             if first + block < firsts.stop:
                 ahead = pool.submit(sample, first + block)
-            row0 = rows[:-1] + (first + every - 1) // every
-            if runs == 1:  # the run's own arrays: views of its lane
-                if status[0, 0, 0] == DONE:
-                    status[0, 0] = advance(
-                        *(a if f.endswith("_idx") else a[0, ..., 0] for f, a in lane_mats.items()),
-                        static[0], k[0, ..., 0], r[0, ..., 0], table[0, :, :, 0], y_start[0],
-                        y_step[0], z[0, :, 0], dts[0], first, every[0], newton_max_iter,
-                        *(a[row0[0] :] for a in flat.values()),
-                    )  # fmt: skip
-            else:
+            row0 = rows[:-1] + (first + per_run["every"] - 1) // per_run["every"]
+            if n_groups:
                 advance_groups(
-                    *lane_mats.values(), in_lanes(static, take), k, r, table,
-                    in_lanes(y_start, take), in_lanes(y_step, take), count, z,
-                    in_lanes(dts, take), first, in_lanes(every, take), newton_max_iter,
-                    in_lanes(row0, take),
-                    *[*flat.values(), status],
+                    *lane_mats, lane["static"], k, r, table, lane["y_start"], lane["y_step"],
+                    count, lane_z, lane["dt"], first, lane["every"], newton_max_iter,
+                    in_lanes(row0, take), *flat.values(), lane_status,
+                )  # fmt: skip
+            if in_groups < runs:
+                advance_runs(
+                    *run_mats, per_run["static"][one], k1, r1, table1, per_run["y_start"][one],
+                    per_run["y_step"][one], in_start, z[one], per_run["dt"][one], first,
+                    per_run["every"][one], newton_max_iter, row0[one], *flat.values(),
+                    status[one],
                 )  # fmt: skip
             for b in range(runs):
-                code, at = status.reshape(-1, 2)[b]
+                code, at = status[b]
                 if code in (NEWTON_FAILED, NOT_FINITE) and errors[b] is None:
                     stop = failure if code == NEWTON_FAILED else non_finite
                     errors[b] = stop(problems[b], first + int(at))
