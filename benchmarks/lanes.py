@@ -1,11 +1,12 @@
-"""Runs in the vector lanes: ns per run-step for L = 1, 4, 8, 16 runs side by side.
+"""Runs in the vector lanes: ns per run-step for batches of L = 1, 4, 8, 16 runs.
 
 Run with ``python benchmarks/lanes.py`` (``--smoke`` for a short check in CI). On one
-numba thread, the compiled loop of L runs of one model side by side (`advance_groups`, in
-groups of at most `LANES`) is timed against the per-run loop (`advance`) in the same
-process, on the same track input (8 Hz, 1 mm, a phase per run; input sampled
-beforehand, every 10th step stored, best of 5). The stored arrays of each lane are checked
-to equal its run alone, to the bit.
+numba thread, a batch of L runs of one model goes as `central.solve` sends it (each full
+group of `LANES` runs side by side in the lanes, `advance_groups`; the others one by one,
+`advance_runs`), timed against the per-run loop (`advance`) in the same process, on the
+same track input (8 Hz, 1 mm, a phase per run; input sampled beforehand, every 10th step
+stored, best of 5). The stored arrays of each run are checked to equal the run alone, to
+the bit.
 """
 
 from __future__ import annotations
@@ -18,8 +19,10 @@ import numpy as np
 
 from trackdyn.solver.central import (
     DONE,
+    LANES,
     advance,
     advance_groups,
+    advance_runs,
     in_lanes,
     lane_groups,
     run_matrices,
@@ -69,38 +72,50 @@ def per_run(model, k, r, repeat):
     return best, out
 
 
-def lanes(model, k, r, repeat):
-    """Best time [s] of `advance_groups` for the runs of ``k`` (steps, contacts, runs) side
-    by side, and each run's outputs."""
+def batch(model, k, r, repeat):
+    """Best time [s] of the runs of ``k`` (steps, contacts, runs) as `central.solve` sends
+    them (full groups in the lanes, the others one by one), and each run's outputs."""
     steps, nc, runs = k.shape
     take = lane_groups(runs)
-    n_groups, width = take.shape
+    n_groups, one = take.shape[0], slice(take.size, runs)
     rows = (steps - 1) // STORE_EVERY + 1
     mats = run_matrices([model] * runs, [DT] * runs)
-    lane_mats = [a if f.endswith("_idx") else in_lanes(a, take) for f, a in mats._asdict().items()]
-    per_lane = {
-        name: in_lanes(np.full(runs, value), take)
-        for name, value in (("static", model.static_wheel_load), ("y_start", 0.0),
-                            ("y_step", 1.0), ("dt", DT), ("every", STORE_EVERY))
-    }  # fmt: skip
-    k_lanes = in_lanes(np.moveaxis(k, 2, 0), take)
-    r_lanes = in_lanes(np.moveaxis(r, 2, 0), take)
-    table = np.zeros((n_groups, 0, nc, width, 0))
-    count = np.full((n_groups, width), steps)
-    row0 = in_lanes(np.arange(runs) * rows, take)
+    idx = {f for f in mats._fields if f.endswith("_idx")}
+    lane_mats = [a if f in idx else in_lanes(a, take) for f, a in mats._asdict().items()]
+    run_mats = [a if f in idx else a[one] for f, a in mats._asdict().items()]
+    per_run = {
+        "static": np.full(runs, model.static_wheel_load),
+        "y_start": np.zeros(runs),
+        "y_step": np.ones(runs),
+        "dt": np.full(runs, DT),
+        "every": np.full(runs, STORE_EVERY),
+        "row0": np.arange(runs) * rows,
+    }
+    lane = {name: in_lanes(a, take) for name, a in per_run.items()}
+    alone = {name: a[one] for name, a in per_run.items()}
+    k_lanes, r_lanes = (in_lanes(np.moveaxis(a, 2, 0), take) for a in (k, r))
+    k_one, r_one = (np.ascontiguousarray(np.moveaxis(a, 2, 0)[one].reshape(-1, nc)) for a in (k, r))
+    in_start = np.arange(runs - take.size + 1) * steps
+    count = np.full((n_groups, take.shape[1]), steps)
     out = outputs(model, rows * runs)
     best = np.inf
     for _ in range(repeat):
-        z = np.zeros((n_groups, 2 * len(model.dof_names), width))
-        status = np.zeros((n_groups, width, 2), np.int64)
+        z = np.zeros((runs, 2 * len(model.dof_names)))
+        lane_z = in_lanes(z, take)
+        status = np.zeros((runs, 2), np.int64)
         t = time.perf_counter()
         advance_groups(
-            *lane_mats, per_lane["static"], k_lanes, r_lanes, table, per_lane["y_start"],
-            per_lane["y_step"], count, z, per_lane["dt"], 0, per_lane["every"].astype(np.int64),
-            50, row0, *out, status,
+            *lane_mats, lane["static"], k_lanes, r_lanes, np.zeros((n_groups, 0, nc, LANES, 0)),
+            lane["y_start"], lane["y_step"], count, lane_z, lane["dt"], 0, lane["every"], 50,
+            lane["row0"], *out, status[: take.size].reshape(n_groups, LANES, 2),
+        )  # fmt: skip
+        advance_runs(
+            *run_mats, alone["static"], k_one, r_one, np.zeros((0, nc, 0)), alone["y_start"],
+            alone["y_step"], in_start, z[one], alone["dt"], 0, alone["every"], 50,
+            alone["row0"], *out, status[one],
         )  # fmt: skip
         best = min(best, time.perf_counter() - t)
-        assert (status[..., 0] == DONE).all(), "a run of the benchmark stopped"
+        assert (status[:, 0] == DONE).all(), "a run of the benchmark stopped"
     return best, [[a[b * rows : (b + 1) * rows] for a in out] for b in range(runs)]
 
 
@@ -120,10 +135,12 @@ def main():
         model = build_model(name, vehicle)
         k, r = track_input(model, max(sizes), steps)
         per_run(model, k[:10, :, 0], r[:10, :, 0], 1)  # compile
-        lanes(model, k[:10, :, :2], r[:10, :, :2], 1)
+        batch(model, k[:10, :, :9], r[:10, :, :9], 1)
         one, alone = per_run(model, k[:, :, 0], r[:, :, 0], repeat)
-        times = {n: lanes(model, k[:, :, :n], r[:, :, :n], repeat) for n in sizes}
-        same = all(np.array_equal(a, b) for a, b in zip(times[8][1][0], alone, strict=True))
+        times = {n: batch(model, k[:, :, :n], r[:, :, :n], repeat) for n in sizes}
+        same = all(
+            np.array_equal(a, b) for n in sizes for a, b in zip(times[n][1][0], alone, strict=True)
+        )
         print(f"{name:<11}{one / steps * 1e9:9.0f}"
               + "".join(f"{times[n][0] / steps / n * 1e9:9.0f}" for n in sizes)
               + f"{times[8][0] / one:9.2f}{'yes' if same else 'NO':>9}")  # fmt: skip
