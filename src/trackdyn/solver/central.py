@@ -18,13 +18,13 @@ soon as the states it lands in are the ones it assumed, so the iteration stops t
 starts from the previous step's states and usually needs one solve. The matrices
 ``(I + H diag(C_slope·stick))^-1`` of all ``2^nw`` state combinations are formed once.
 
-A run alone goes through `advance`. Runs of one model go side by side through
-`advance_lanes`: each array carries the runs (lanes) along its last, contiguous axis, so
-that every operation of a step is one loop over the lanes, which the compiler turns into
-vector instructions; a lane's stick/slip states, its Newton iteration and its end are
-selects on its own mask. The sums of each lane are done in `advance`'s order and the loops
-are compiled without reassociation (`FASTMATH`), so a run's results in the lanes are
-those it gives alone, to the bit.
+A run goes through `advance`; runs of one model, in full groups of `LANES`, side by side
+through `advance_lanes`: each array carries the runs (lanes) along its last, contiguous
+axis, so that every operation of a step is one loop over the lanes (which LLVM vectorises
+where it can prove the arrays apart); a lane's stick/slip states, its Newton iteration and
+its end are selects on its own mask. The sums of each lane are done in `advance`'s order
+and the loops are compiled without reassociation (`FASTMATH`), so a run's results in the
+lanes are those it gives alone, to the bit.
 
 References
 ----------
@@ -294,16 +294,16 @@ def advance_lanes(
     z, dt, step0, store_every, max_iter, row0,
     out_q, out_v, out_a, out_wl, out_secondary, out_fw, out_vw, out_k, out_r, status,
 ):  # fmt: skip
-    """`advance` for ``L`` runs of one model side by side in the vector lanes.
+    """`advance` for `LANES` runs of one model side by side in the vector lanes.
 
-    Every array of a run carries the lane axis last (``z`` is (2n, L), ``p_val`` (n,
-    width, L), ``k_in`` (steps, contacts, L), ``table`` (steps, contacts, L, grid), ...);
-    the sparse rows' column indices are the model's, shared. Lane ``b`` advances
-    ``count[b]`` steps; every operation of a step is done for all lanes, stick/slip and
-    the end of a run as selects on each lane's own mask, so that the lanes share every
-    instruction. The Newton iteration goes on while a running lane's states change; a lane
-    whose iteration fails or whose stored displacement is not finite stops (its
-    ``status`` row gets what `advance` would return) and is left as it is while the
+    Every array of a run carries the lane axis last, `LANES` long (``z`` is (2n, LANES),
+    ``p_val`` (n, width, LANES), ``k_in`` (steps, contacts, LANES), ``table`` (steps,
+    contacts, LANES, grid), ...); the sparse rows' column indices are the model's, shared.
+    Lane ``b`` advances ``count[b]`` steps. Every operation of a step is one loop over the
+    lanes, stick/slip and the end of a run selects on each lane's own mask, so that no lane
+    branches on its own. The Newton iteration goes on while a running lane's states
+    change; a lane whose iteration fails or whose stored displacement is not finite stops
+    (its ``status`` row gets what `advance` would return) and is left as it is while the
     others go on. Its stored steps go to the output rows from ``row0[b]`` on; a lane whose
     ``status[b, 0]`` is not `DONE` is left alone.
     """
