@@ -206,8 +206,9 @@ def simulate_batch(
     """Run several vehicles over a track side by side; the results of `simulate` each.
 
     Runs of the same model and solver go through the solver together (one compiled call
-    per block of steps, parallel over the runs); each run's results are those it gives
-    alone, to the bit. A run that cannot be made or fails (bad time step, Newton) comes
+    per block of steps, the runs side by side in the vector lanes,
+    `trackdyn.solver.central.advance_lanes`); each run's results are those it gives alone,
+    to the bit. A run that cannot be made or fails (bad time step, Newton) comes
     back as its `TrackdynInputError` and does not stop the others.
 
     Parameters

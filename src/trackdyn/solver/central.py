@@ -18,6 +18,14 @@ soon as the states it lands in are the ones it assumed, so the iteration stops t
 starts from the previous step's states and usually needs one solve. The matrices
 ``(I + H diag(C_slope·stick))^-1`` of all ``2^nw`` state combinations are formed once.
 
+A run goes through `advance`; runs of one model, in full groups of `LANES`, side by side
+through `advance_lanes`: each array carries the runs (lanes) along its last, contiguous
+axis, so that every operation of a step is one loop over the lanes (which LLVM vectorises
+where it can prove the arrays apart); a lane's stick/slip states, its Newton iteration and
+its end are selects on its own mask. The sums of each lane are done in `advance`'s order
+and the loops are compiled without reassociation (`FASTMATH`), so a run's results in the
+lanes are those it gives alone, to the bit.
+
 References
 ----------
 Fröhling, R.D. (1997). Deterioration of railway track due to dynamic vehicle loading and
@@ -62,8 +70,25 @@ CHUNK_BYTES = 32 * 2**20
 
 DONE, NEWTON_FAILED, NOT_FINITE, NOT_STARTED = 0, 1, 2, 3
 """How `advance` ends: all steps done; no Newton solution at a step; a stored
-displacement not finite. `advance_batch` leaves runs in any state but `DONE` alone
+displacement not finite. `advance_lanes` leaves runs in any state but `DONE` alone
 (`NOT_STARTED`: no start state)."""
+
+LANES = 8
+"""Runs of one model in a group of the vector lanes (`advance_lanes`): a compile-time
+constant, so that each loop over the lanes is a fixed number of instructions, without a
+remainder (8 doubles fill an AVX-512 register). Fewer runs than this go one by one
+(`advance_runs`): a group costs as much with fewer lanes filled."""
+
+FASTMATH = {"nnan", "ninf", "nsz", "contract", "afn"}
+"""LLVM's fast-math flags of the loops: all but reassociation, so that a run's sums are
+done in the same order alone and in the lanes (the same results, to the bit)."""
+
+STEP_JIT = dict(cache=True, fastmath=FASTMATH, error_model="numpy", nogil=True, _nrt=False)
+"""numba options of the helpers the loops call at every step (`vehicle_step`,
+`store_vehicle`): compiled without numba's reference counting (they allocate nothing), so
+that a call does not count a reference to each of its arrays, which cost more than the
+whole step of the small models (2dof, every 10th step stored: 177 ns a step with the
+counting, 41 without)."""
 
 _EXPONENT = 0x7FF0000000000000
 """Exponent bits of a float64, all set for inf and NaN (a test that ``fastmath`` keeps)."""
@@ -132,7 +157,37 @@ def wedge_step(dw_idx, dw_val, H, jinv, wedge, z, q1, inv2dt, max_iter,
     return True
 
 
-@njit(cache=True, inline="always")
+@njit(**STEP_JIT)
+def vehicle_step(p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dw_idx, dw_val, H, jinv,
+                 wedge, z, fc, inv2dt, max_iter, q1, vfree, rhs, v, f_up, f_down, F,
+                 state):  # fmt: skip
+    """The vehicle's next displacement ``q1`` from ``z = [q0, q-1]`` and the contact forces
+    ``fc``: ``P z - Gc^T fc``, then the wedge forces (`wedge_step`) and ``- Gw^T F``.
+    Returns False if the wedges' Newton iteration did not converge."""
+    n = p_idx.shape[0]
+    for i in range(n):
+        acc = 0.0
+        for j in range(p_idx.shape[1]):
+            acc += p_val[i, j] * z[p_idx[i, j]]
+        q1[i] = acc
+    for c in range(gc_idx.shape[0]):
+        f = fc[c]
+        for j in range(gc_idx.shape[1]):
+            q1[gc_idx[c, j]] -= gc_val[c, j] * f
+    nw = dw_idx.shape[0]
+    if nw > 0 and not wedge_step(
+        dw_idx, dw_val, H, jinv, wedge, z, q1, inv2dt, max_iter,
+        vfree, rhs, v, f_up, f_down, F, state,
+    ):  # fmt: skip
+        return False
+    for w in range(nw):
+        f = F[w]
+        for j in range(gw_idx.shape[1]):
+            q1[gw_idx[w, j]] -= gw_val[w, j] * f
+    return True
+
+
+@njit(**STEP_JIT)
 def store_vehicle(z, q1, F, v, ds_idx, ds_val, inv2dt, invdt2, row,
                   out_q, out_v, out_a, out_secondary, out_fw, out_vw):  # fmt: skip
     """Write the step's displacement, velocity, acceleration, secondary displacement and
@@ -156,7 +211,7 @@ def store_vehicle(z, q1, F, v, ds_idx, ds_val, inv2dt, invdt2, row,
     return True
 
 
-@njit(cache=True, fastmath=True, error_model="numpy")
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy", nogil=True)
 def advance(
     p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dc_idx, dc_val, dw_idx, dw_val,
     ds_idx, ds_val, H, jinv, wedge, contact, static_load,
@@ -204,25 +259,11 @@ def advance(
                 fc[c] -= static_load
             else:
                 fc[c] = k_in[s, c] * (x - r_in[s, c])
-        # q1 without the wedge forces
-        for i in range(n):
-            acc = 0.0
-            for j in range(p_idx.shape[1]):
-                acc += p_val[i, j] * z[p_idx[i, j]]
-            q1[i] = acc
-        for c in range(nc):
-            f = fc[c]
-            for j in range(gc_idx.shape[1]):
-                q1[gc_idx[c, j]] -= gc_val[c, j] * f
-        if nw > 0 and not wedge_step(
-            dw_idx, dw_val, H, jinv, wedge, z, q1, inv2dt, max_iter,
-            vfree, rhs, v, f_up, f_down, F, state,
+        if not vehicle_step(
+            p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dw_idx, dw_val, H, jinv, wedge,
+            z, fc, inv2dt, max_iter, q1, vfree, rhs, v, f_up, f_down, F, state,
         ):  # fmt: skip
             return NEWTON_FAILED, s
-        for w in range(nw):
-            f = F[w]
-            for j in range(gw_idx.shape[1]):
-                q1[gw_idx[w, j]] -= gw_val[w, j] * f
         if to_store == 0:
             to_store = store_every
             if not store_vehicle(
@@ -245,21 +286,204 @@ def advance(
     return DONE, -1
 
 
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy", nogil=True)
+def advance_lanes(
+    p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dc_idx, dc_val, dw_idx, dw_val,
+    ds_idx, ds_val, H, jinv, wedge, contact, static_load,
+    k_in, r_in, table, y_start, y_step, count,
+    z, dt, step0, store_every, max_iter, row0,
+    out_q, out_v, out_a, out_wl, out_secondary, out_fw, out_vw, out_k, out_r, status,
+):  # fmt: skip
+    """`advance` for `LANES` runs of one model side by side in the vector lanes.
+
+    Every array of a run carries the lane axis last, `LANES` long (``z`` is (2n, LANES),
+    ``p_val`` (n, width, LANES), ``k_in`` (steps, contacts, LANES), ``table`` (steps,
+    contacts, LANES, grid), ...); the sparse rows' column indices are the model's, shared.
+    Lane ``b`` advances ``count[b]`` steps. Every operation of a step is one loop over the
+    lanes, stick/slip and the end of a run selects on each lane's own mask, so that no lane
+    branches on its own. The Newton iteration goes on while a running lane's states
+    change; a lane whose iteration fails or whose stored displacement is not finite stops
+    (its ``status`` row gets what `advance` would return) and is left as it is while the
+    others go on. Its stored steps go to the output rows from ``row0[b]`` on; a lane whose
+    ``status[b, 0]`` is not `DONE` is left alone.
+    """
+    n = p_idx.shape[0]
+    nc = dc_idx.shape[0]
+    nw = dw_idx.shape[0]
+    lanes = LANES
+    nonlinear = table.shape[0] > 0
+    inv2dt = 0.5 / dt
+    invdt2 = 1.0 / (dt * dt)
+    q1 = np.empty((n, lanes))
+    fc = np.empty((nc, lanes))
+    vfree = np.empty((nw, lanes))
+    rhs = np.empty((nw, lanes))
+    v = np.zeros((nw, lanes))
+    f_up = np.empty((nw, lanes))
+    f_down = np.empty((nw, lanes))
+    F = np.zeros((nw, lanes))
+    state = np.zeros((nw, lanes), np.int64)  # 0 stick, 1 slip in compression, 2 in extension
+    mask = np.empty(lanes, np.int64)
+    jl = np.empty((nw, nw, lanes))  # the inverse of each lane's stick/slip states `held`
+    held = np.full(lanes, -1, np.int64)
+    changed = np.empty(lanes, np.int64)
+    run = np.empty(lanes, np.bool_)
+    stored = np.zeros(lanes, np.int64)
+    to_store = -step0 % store_every
+    z_bits = z.view(np.int64)
+    for s in range(count.max()):
+        for b in range(lanes):
+            run[b] = status[b, 0] == DONE and s < count[b]
+        for c in range(nc):
+            for b in range(lanes):
+                fc[c, b] = 0.0
+            for j in range(dc_idx.shape[1]):
+                col = dc_idx[c, j]
+                for b in range(lanes):
+                    fc[c, b] += dc_val[c, j, b] * z[col, b]
+            if nonlinear:
+                for b in range(lanes):
+                    x = fc[c, b] - r_in[s, c, b]
+                    fc[c, b] = contact_table_force(table[s, c, b], y_start[b], y_step[b], x)
+                    fc[c, b] -= static_load[b]
+            else:
+                for b in range(lanes):
+                    fc[c, b] = k_in[s, c, b] * (fc[c, b] - r_in[s, c, b])
+        # q1 without the wedge forces
+        for i in range(n):
+            for b in range(lanes):
+                q1[i, b] = 0.0
+            for j in range(p_idx.shape[1]):
+                col = p_idx[i, j]
+                for b in range(lanes):
+                    q1[i, b] += p_val[i, j, b] * z[col, b]
+        for c in range(nc):
+            for j in range(gc_idx.shape[1]):
+                row = gc_idx[c, j]
+                for b in range(lanes):
+                    q1[row, b] -= gc_val[c, j, b] * fc[c, b]
+        if nw > 0:
+            # the wedges: free velocities and slip forces (`wedge_step`), then Newton
+            for w in range(nw):
+                for b in range(lanes):
+                    f_up[w, b] = 0.0  # here the displacement across the wedge
+                    vfree[w, b] = 0.0
+                for j in range(dw_idx.shape[1]):
+                    col = dw_idx[w, j]
+                    for b in range(lanes):
+                        f_up[w, b] += dw_val[w, j, b] * z[col, b]
+                        vfree[w, b] += dw_val[w, j, b] * (q1[col, b] - z[n + col, b])
+                for b in range(lanes):
+                    vfree[w, b] *= inv2dt[b]
+                    normal = wedge[w, 0, b] + f_up[w, b]
+                    normal = 0.0 if normal < 0.0 else normal
+                    f_up[w, b] = normal * wedge[w, 1, b]
+                    f_down[w, b] = normal * wedge[w, 2, b]
+            for b in range(lanes):
+                changed[b] = 1
+            for _ in range(max_iter):
+                for b in range(lanes):
+                    mask[b] = 0
+                for w in range(nw):
+                    for b in range(lanes):
+                        st = state[w, b]
+                        F[w, b] = 0.0 if st == 0 else (f_up[w, b] if st == 1 else -f_down[w, b])
+                        mask[b] += (1 << w) if st == 0 else 0
+                for w in range(nw):
+                    for b in range(lanes):
+                        rhs[w, b] = vfree[w, b]
+                    for u in range(nw):
+                        for b in range(lanes):
+                            rhs[w, b] -= H[w, u, b] * F[u, b]
+                for b in range(lanes):
+                    changed[b] = 0
+                    if held[b] != mask[b]:  # the lane's inverse, where the loop reads it
+                        held[b] = mask[b]
+                        for w in range(nw):
+                            for u in range(nw):
+                                jl[w, u, b] = jinv[mask[b], w, u, b]
+                for w in range(nw):
+                    for b in range(lanes):
+                        v[w, b] = 0.0
+                    for u in range(nw):
+                        for b in range(lanes):
+                            v[w, b] += jl[w, u, b] * rhs[u, b]
+                    for b in range(lanes):
+                        f = wedge[w, 3, b] * v[w, b]
+                        new = 1 if f > f_up[w, b] else (2 if f < -f_down[w, b] else 0)
+                        changed[b] |= new != state[w, b]
+                        state[w, b] = new
+                pending = 0
+                for b in range(lanes):
+                    pending += changed[b] if run[b] else 0
+                if pending == 0:
+                    break
+            for b in range(lanes):
+                if run[b] and changed[b]:
+                    status[b, 0], status[b, 1] = NEWTON_FAILED, s
+                    run[b] = False
+            for w in range(nw):
+                for b in range(lanes):
+                    F[w, b] = wedge[w, 3, b] * v[w, b] if state[w, b] == 0 else F[w, b]
+                for j in range(gw_idx.shape[1]):
+                    row = gw_idx[w, j]
+                    for b in range(lanes):
+                        q1[row, b] -= gw_val[w, j, b] * F[w, b]
+        for b in range(lanes):
+            if run[b] and to_store[b] == 0:
+                to_store[b] = store_every[b]
+                for i in range(n):
+                    if z_bits[i, b] & _EXPONENT == _EXPONENT:
+                        status[b, 0], status[b, 1] = NOT_FINITE, s
+                        run[b] = False
+                if not run[b]:
+                    continue
+                row = row0[b] + stored[b]
+                for i in range(n):
+                    out_q[row, i] = z[i, b]
+                    out_v[row, i] = (q1[i, b] - z[n + i, b]) * inv2dt[b]
+                    out_a[row, i] = (q1[i, b] - 2.0 * z[i, b] + z[n + i, b]) * invdt2[b]
+                for u in range(ds_idx.shape[0]):
+                    d = 0.0
+                    for j in range(ds_idx.shape[1]):
+                        d += ds_val[u, j, b] * z[ds_idx[u, j], b]
+                    out_secondary[row, u] = d
+                for w in range(nw):
+                    out_fw[row, w] = F[w, b]
+                    out_vw[row, w] = v[w, b]
+                for c in range(nc):
+                    dv = 0.0
+                    for j in range(dc_idx.shape[1]):
+                        dv += dc_val[c, j, b] * out_v[row, dc_idx[c, j]]
+                    out_wl[row, c] = (
+                        static_load[b] + (fc[c, b] + contact[c, 0, b] * dv) / contact[c, 1, b]
+                    )
+                    out_k[row, c] = k_in[s, c, b]
+                    out_r[row, c] = r_in[s, c, b]
+                stored[b] += 1
+            to_store[b] -= 1
+        for i in range(n):
+            for b in range(lanes):
+                z[n + i, b] = z[i, b] if run[b] else z[n + i, b]
+                z[i, b] = q1[i, b] if run[b] else z[i, b]
+
+
 @njit(cache=True, parallel=True, nogil=True)
-def advance_batch(
+def advance_runs(
     p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dc_idx, dc_val, dw_idx, dw_val,
     ds_idx, ds_val, H, jinv, wedge, contact, static_load,
     k_in, r_in, table, y_start, y_step, in_start,
     z, dt, step0, store_every, max_iter, row0,
     out_q, out_v, out_a, out_wl, out_secondary, out_fw, out_vw, out_k, out_r, status,
 ):  # fmt: skip
-    """`advance` for a batch of runs, in parallel over the runs.
+    """`advance` for runs one by one, in parallel over the runs.
 
-    Every array of `StepMatrices` and ``static_load, y_start, y_step, z, dt, step0,
-    store_every`` carry a leading run axis; the inputs of run ``b`` are the rows
-    ``in_start[b]:in_start[b + 1]`` of ``k_in``, ``r_in`` (and ``table``), its stored
-    steps go to the output rows from ``row0[b]`` on. A run whose ``status[b, 0]`` is not
-    `DONE` has stopped and is left alone; the others get there the pair `advance` returns.
+    The sparse rows' indices are shared; every other array of `StepMatrices` and
+    ``static_load, y_start, y_step, z, dt, store_every, row0`` carry a leading run axis.
+    The inputs of run ``b`` are the rows ``in_start[b]:in_start[b + 1]`` of ``k_in``,
+    ``r_in`` (and ``table``), its stored steps go to the output rows from ``row0[b]`` on.
+    A run whose ``status[b, 0]`` is not `DONE` is left alone; the others get there the
+    pair `advance` returns.
     """
     for b in prange(z.shape[0]):
         if status[b, 0] == DONE:
@@ -267,14 +491,34 @@ def advance_batch(
             tab = table[lo:hi] if table.shape[0] > 0 else table
             r0 = row0[b]
             status[b, 0], status[b, 1] = advance(
-                p_idx[b], p_val[b], gc_idx[b], gc_val[b], gw_idx[b], gw_val[b], dc_idx[b],
-                dc_val[b], dw_idx[b], dw_val[b], ds_idx[b], ds_val[b], H[b], jinv[b],
-                wedge[b], contact[b], static_load[b],
-                k_in[lo:hi], r_in[lo:hi], tab, y_start[b], y_step[b],
-                z[b], dt[b], step0[b], store_every[b], max_iter,
-                out_q[r0:], out_v[r0:], out_a[r0:], out_wl[r0:], out_secondary[r0:], out_fw[r0:],
-                out_vw[r0:], out_k[r0:], out_r[r0:],
+                p_idx, p_val[b], gc_idx, gc_val[b], gw_idx, gw_val[b], dc_idx, dc_val[b],
+                dw_idx, dw_val[b], ds_idx, ds_val[b], H[b], jinv[b], wedge[b], contact[b],
+                static_load[b], k_in[lo:hi], r_in[lo:hi], tab, y_start[b], y_step[b],
+                z[b], dt[b], step0, store_every[b], max_iter,
+                out_q[r0:], out_v[r0:], out_a[r0:], out_wl[r0:], out_secondary[r0:],
+                out_fw[r0:], out_vw[r0:], out_k[r0:], out_r[r0:],
             )  # fmt: skip
+
+
+@njit(cache=True, parallel=True, nogil=True)
+def advance_groups(
+    p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dc_idx, dc_val, dw_idx, dw_val,
+    ds_idx, ds_val, H, jinv, wedge, contact, static_load,
+    k_in, r_in, table, y_start, y_step, count,
+    z, dt, step0, store_every, max_iter, row0,
+    out_q, out_v, out_a, out_wl, out_secondary, out_fw, out_vw, out_k, out_r, status,
+):  # fmt: skip
+    """`advance_lanes` for groups of lanes, in parallel over the groups: every array of
+    `advance_lanes` but the sparse rows' indices and the outputs carries a leading group
+    axis."""
+    for g in prange(z.shape[0]):
+        advance_lanes(
+            p_idx, p_val[g], gc_idx, gc_val[g], gw_idx, gw_val[g], dc_idx, dc_val[g], dw_idx,
+            dw_val[g], ds_idx, ds_val[g], H[g], jinv[g], wedge[g], contact[g], static_load[g],
+            k_in[g], r_in[g], table[g], y_start[g], y_step[g], count[g],
+            z[g], dt[g], step0, store_every[g], max_iter, row0[g],
+            out_q, out_v, out_a, out_wl, out_secondary, out_fw, out_vw, out_k, out_r, status[g],
+        )  # fmt: skip
 
 
 def start_state(p: Problem, wedge) -> np.ndarray:
@@ -292,17 +536,20 @@ def start_state(p: Problem, wedge) -> np.ndarray:
 
 
 def _sparse_rows(D):
-    """Column indices and values of the nonzeros of each row of ``D``, zero-padded.
+    """Column indices of the nonzeros of each row of the matrices ``D`` (runs, rows,
+    columns), zero-padded, and the runs' values there (runs, rows, width).
 
     The models' matrices are mostly zeros (``A`` is block diagonal: no damper crosses the
-    secondary suspension), so the loop runs over nonzeros only.
+    secondary suspension), so the loop runs over nonzeros only; the columns are those
+    where any run has a nonzero (the runs of a batch share them).
     """
-    width = max(1, int((D != 0).sum(axis=1).max())) if D.size else 1
-    idx = np.zeros((D.shape[0], width), np.int64)
-    val = np.zeros((D.shape[0], width))
-    for r, row in enumerate(D):
+    nonzero = (D != 0).any(axis=0)
+    width = max(1, int(nonzero.sum(axis=1).max())) if nonzero.size else 1
+    idx = np.zeros((D.shape[1], width), np.int64)
+    val = np.zeros((D.shape[0], D.shape[1], width))
+    for r, row in enumerate(nonzero):
         nz = np.flatnonzero(row)
-        idx[r, : nz.size], val[r, : nz.size] = nz, row[nz]
+        idx[r, : nz.size], val[:, r, : nz.size] = nz, D[:, r, nz]
     return idx, val
 
 
@@ -327,18 +574,9 @@ class StepMatrices(NamedTuple):
     contact: np.ndarray
 
 
-def step_matrices(model, dt) -> StepMatrices:
-    """Constant arrays of the scheme for `advance`, from a `Model` and the step [s].
-
-    The sparse rows (`_sparse_rows`) of ``P = [A^-1 (2M/Δt² - K), -A^-1 (M/Δt² - C/(2Δt))]``
-    acting on ``[q0, q-1]``, of ``Gc^T`` and ``Gw^T`` with ``Gc = A^-1 Dc^T`` and
-    ``Gw = A^-1 Dw^T``, and of ``Dc``, ``Dw`` and ``Ds``; ``H``; the inverses of
-    ``I + H diag(C_slope·stick)`` for every stick/slip combination; per wedge
-    ``x_ss [m]``, the slip force per unit spring
-    compression in compression and in extension ``k_ss μ / (tan α_w ∓ μ)`` [N/m], and
-    ``C_slope`` [N s/m] (`wedge_table`); per contact the track damping [N s/m] and its
-    number of axles (`contact_table`).
-    """
+def _scheme(model, dt) -> tuple[list, list]:
+    """The dense matrices of `step_matrices` (``P``, ``Gc^T``, ``Gw^T``, ``Dc``, ``Dw``,
+    ``Ds``) and its other arrays (``H``, the inverses, the wedge and contact tables)."""
     M, C, K, Dc, Dw = model.M, model.C, model.K, model.Dc, model.Dw
     A = M / dt**2 + C / (2 * dt)
     Ainv = np.linalg.inv(A)
@@ -352,22 +590,53 @@ def step_matrices(model, dt) -> StepMatrices:
     for mask in range(2**nw):
         stick = np.array([(mask >> w) & 1 for w in range(nw)], dtype=float)
         jinv[mask] = np.linalg.inv(np.eye(nw) + H * (c_slope * stick)[None, :])
-    sparse = [_sparse_rows(x) for x in (P, (Ainv @ Dc.T).T, Gw.T, Dc, Dw, model.Ds)]
+    dense = [P, (Ainv @ Dc.T).T, Gw.T, Dc, Dw, model.Ds]
+    return dense, [H, jinv, wedge, contact_table(model)]
+
+
+def run_matrices(models, dts) -> StepMatrices:
+    """`StepMatrices` of runs of one model (`step_matrices` of each): the sparse rows'
+    indices shared, every other array with a leading run axis."""
+    dense, rest = zip(*(_scheme(m, dt) for m, dt in zip(models, dts, strict=True)), strict=True)
+    sparse = [_sparse_rows(np.stack(d)) for d in zip(*dense, strict=True)]
     pairs = (a for pair in sparse for a in pair)
-    return StepMatrices._make([*pairs, H, jinv, wedge, contact_table(model)])
+    return StepMatrices._make([*pairs, *(np.stack(r) for r in zip(*rest, strict=True))])
 
 
-def _stack(arrays):
-    """Arrays of the runs along a new first axis, zero-padded to the widest."""
-    shape = np.max([a.shape for a in arrays], axis=0)
-    out = np.zeros((len(arrays), *shape), arrays[0].dtype)
-    for b, a in enumerate(arrays):
-        out[(b, *(slice(0, s) for s in a.shape))] = a
-    return out
+def step_matrices(model, dt) -> StepMatrices:
+    """Constant arrays of the scheme for `advance`, from a `Model` and the step [s].
+
+    The sparse rows (`_sparse_rows`) of ``P = [A^-1 (2M/Δt² - K), -A^-1 (M/Δt² - C/(2Δt))]``
+    acting on ``[q0, q-1]``, of ``Gc^T`` and ``Gw^T`` with ``Gc = A^-1 Dc^T`` and
+    ``Gw = A^-1 Dw^T``, and of ``Dc``, ``Dw`` and ``Ds``; ``H``; the inverses of
+    ``I + H diag(C_slope·stick)`` for every stick/slip combination; per wedge
+    ``x_ss [m]``, the slip force per unit spring
+    compression in compression and in extension ``k_ss μ / (tan α_w ∓ μ)`` [N/m], and
+    ``C_slope`` [N s/m] (`wedge_table`); per contact the track damping [N s/m] and its
+    number of axles (`contact_table`).
+    """
+    m = run_matrices([model], [dt])
+    return StepMatrices._make(a if f.endswith("_idx") else a[0] for f, a in m._asdict().items())
+
+
+def lane_groups(runs: int) -> np.ndarray:
+    """The runs of each group of the lanes, (groups, `LANES`): the first runs, as many
+    full groups as there are; the others go one by one."""
+    return np.arange(runs // LANES * LANES).reshape(-1, LANES)
+
+
+def in_lanes(a, take):
+    """Per-run array ``a`` (runs, ...) in the lanes: (groups, ..., lanes) for the runs
+    ``take`` (`lane_groups`)."""
+    return np.ascontiguousarray(np.moveaxis(a[take], 1, -1))
 
 
 def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> list:
     """Integrate runs of one model side by side: one compiled call per block of steps.
+
+    Each full group of `LANES` runs goes through `advance_groups` (side by side in the
+    vector lanes, in parallel over the groups), the runs left over through `advance_runs`
+    (one by one, in parallel over the runs).
 
     Parameters
     ----------
@@ -386,64 +655,97 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> 
         Per run, a dict of the `OUTPUTS` arrays, or the `TrackdynInputError` that
         stopped it.
     """
-    mats = [step_matrices(p.model, p.dt) for p in problems]
-    stacked = StepMatrices(*(_stack(list(f)) for f in zip(*mats, strict=True)))
-    errors: list = [None] * len(problems)
-    status = np.zeros((len(problems), 2), np.int64)  # DONE: running
-    z = np.zeros((len(problems), 2 * len(problems[0].model.dof_names)))
-    for b, (p, m) in enumerate(zip(problems, mats, strict=True)):
+    runs = len(problems)
+    take = lane_groups(runs)
+    n_groups, in_groups = take.shape[0], take.size
+    one = slice(in_groups, runs)  # the runs one by one
+    mats = run_matrices([p.model for p in problems], [p.dt for p in problems])
+    idx = {f for f in mats._fields if f.endswith("_idx")}
+    lane_mats = [a if f in idx else in_lanes(a, take) for f, a in mats._asdict().items()]
+    run_mats = [a if f in idx else a[one] for f, a in mats._asdict().items()]
+    errors: list = [None] * runs
+    status = np.zeros((runs, 2), np.int64)  # DONE: running
+    z = np.zeros((runs, 2 * len(problems[0].model.dof_names)))
+    for b, p in enumerate(problems):
         try:
-            z[b] = start_state(p, m.wedge)
+            z[b] = start_state(p, mats.wedge[b])
         except TrackdynInputError as exc:
             errors[b], status[b, 0] = exc, NOT_STARTED
+    lane_z, lane_status = in_lanes(z, take), status[:in_groups].reshape(n_groups, LANES, 2)
     rows = np.cumsum([0] + [p.n_store for p in problems])
     flat = {name: np.empty((rows[-1], w)) for name, w in widths(problems[0].model).items()}
-    every = np.array([p.store_every for p in problems])
-    y_start, y_step = np.array([table_step(track_input(p).grid) for p in problems]).T
-    static = np.array([p.model.static_wheel_load for p in problems])
-    dts = np.array([p.dt for p in problems])
-    step_bytes = 8 * len(problems[0].model.contact_names) * (2 + track_input(problems[0]).grid.size)
-    block = max(1, min(CHUNK_STEPS, CHUNK_BYTES // step_bytes // len(problems)))
+    per_run = dict(
+        static=np.array([p.model.static_wheel_load for p in problems]),
+        y_start=np.array([table_step(track_input(p).grid)[0] for p in problems]),
+        y_step=np.array([table_step(track_input(p).grid)[1] for p in problems]),
+        dt=np.array([p.dt for p in problems]),
+        every=np.array([p.store_every for p in problems]),
+    )
+    lane = {name: in_lanes(a, take) for name, a in per_run.items()}
+    nc, grid = len(problems[0].model.contact_names), track_input(problems[0]).grid.size
+    step_bytes = 8 * nc * (2 + grid)
+    block = max(1, min(CHUNK_STEPS, CHUNK_BYTES // step_bytes // runs))
     firsts = range(0, max(p.n_steps for p in problems), block)
 
     def sample(first):
-        """Track input of the block of steps from ``first`` on (none for stopped runs)."""
-        counts = [
-            0 if status[b, 0] != DONE else max(min(block, p.n_steps - first), 0)
-            for b, p in enumerate(problems)
-        ]
-        sampled = [
-            p.inputs(p.centre0 + p.speed * p.dt * np.arange(first, first + n))
-            for p, n in zip(problems, counts, strict=True)
-        ]
-        k, r, table = (np.concatenate(a) for a in zip(*sampled, strict=True))
-        return k, r, table, np.cumsum([0, *counts])
+        """Track input of the block of steps from ``first`` on (none for stopped runs):
+        in the lanes with each lane's number of steps, and of the runs one by one, one
+        after the other, with where each starts."""
+        count = np.zeros(runs, np.int64)
+        for b, p in enumerate(problems):
+            if status[b, 0] == DONE:
+                count[b] = max(min(block, p.n_steps - first), 0)
+        shape = (n_groups, int(count[:in_groups].max(initial=0)), nc, LANES)
+        k, r = np.zeros(shape), np.zeros(shape)
+        table = np.zeros((*shape, grid) if grid else (n_groups, 0, nc, LANES, 0))
+        sampled = []
+        for b in np.flatnonzero(count).tolist():
+            p = problems[b]
+            x = p.centre0 + p.speed * p.dt * np.arange(first, first + count[b])
+            if b >= in_groups:
+                sampled.append(p.inputs(x))
+                continue
+            g, n = b // LANES, count[b]
+            k[g, :n, :, b % LANES], r[g, :n, :, b % LANES], tb = p.inputs(x)
+            if grid:
+                table[g, :n, :, b % LANES] = tb
+        empty = (np.zeros((0, nc)), np.zeros((0, nc)), np.zeros((0, nc, grid)))
+        alone = [np.concatenate(a) for a in zip(empty, *sampled, strict=True)]
+        in_start = np.cumsum([0, *count[one]])
+        return (k, r, table, count[:in_groups].reshape(n_groups, LANES)), (*alone, in_start)
 
     # the next block's input is sampled in a thread while the compiled loop (which
     # releases the GIL) advances this one
     with ThreadPoolExecutor(max_workers=1) as pool:
         ahead = pool.submit(sample, 0)
         for first in firsts:
-            k, r, table, in_start = ahead.result()
+            (k, r, table, count), (k1, r1, table1, in_start) = ahead.result()
             if first + block < firsts.stop:
                 ahead = pool.submit(sample, first + block)
-            advance_batch(
-                *stacked, static, k, r, table, y_start, y_step, in_start,
-                z, dts, np.full(len(problems), first), every,
-                newton_max_iter, rows[:-1] + (first + every - 1) // every,
-                *[*flat.values(), status],
-            )  # fmt: skip
-            for b in np.flatnonzero(
-                (status[:, 0] != DONE) & (status[:, 0] != NOT_STARTED)
-            ).tolist():
-                if errors[b] is None:
-                    stop = failure if status[b, 0] == NEWTON_FAILED else non_finite
-                    errors[b] = stop(problems[b], first + int(status[b, 1]))
+            row0 = rows[:-1] + (first + per_run["every"] - 1) // per_run["every"]
+            if n_groups:
+                advance_groups(
+                    *lane_mats, lane["static"], k, r, table, lane["y_start"], lane["y_step"],
+                    count, lane_z, lane["dt"], first, lane["every"], newton_max_iter,
+                    in_lanes(row0, take), *flat.values(), lane_status,
+                )  # fmt: skip
+            if in_groups < runs:
+                advance_runs(
+                    *run_mats, per_run["static"][one], k1, r1, table1, per_run["y_start"][one],
+                    per_run["y_step"][one], in_start, z[one], per_run["dt"][one], first,
+                    per_run["every"][one], newton_max_iter, row0[one], *flat.values(),
+                    status[one],
+                )  # fmt: skip
+            for b in range(runs):
+                code, at = status[b]
+                if code in (NEWTON_FAILED, NOT_FINITE) and errors[b] is None:
+                    stop = failure if code == NEWTON_FAILED else non_finite
+                    errors[b] = stop(problems[b], first + int(at))
             if advanced is not None:
-                advanced(int(in_start[-1]))
+                advanced(int(count.sum()))
     return [
         errors[b] or {name: a[rows[b] : rows[b + 1]] for name, a in flat.items()}
-        for b in range(len(problems))
+        for b in range(runs)
     ]
 
 

@@ -49,7 +49,7 @@ from trackdyn.solver.central import (
     NOT_FINITE,
     step_matrices,
     store_vehicle,
-    wedge_step,
+    vehicle_step,
 )
 from trackdyn.solver.statics import failure, non_finite, widths
 from trackdyn.track.discrete import hertz_stiffness
@@ -159,25 +159,12 @@ def advance(
             fc[c] = per_contact[c] * (wl[c] - static_load)
         for a in range(na):
             W[a] = wl[ax_contact[a]]
-        # vehicle: q1 without the wedge forces, then the wedges
-        for i in range(n):
-            acc = 0.0
-            for j in range(p_idx.shape[1]):
-                acc += p_val[i, j] * z[p_idx[i, j]]
-            q1[i] = acc
-        for c in range(nc):
-            f = fc[c]
-            for j in range(gc_idx.shape[1]):
-                q1[gc_idx[c, j]] -= gc_val[c, j] * f
-        if nw > 0 and not wedge_step(
-            dw_idx, dw_val, H, jinv, wedge, z, q1, inv2dt, max_iter,
-            vfree, rhs, v, f_up, f_down, F, state,
+        # vehicle
+        if not vehicle_step(
+            p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dw_idx, dw_val, H, jinv, wedge,
+            z, fc, inv2dt, max_iter, q1, vfree, rhs, v, f_up, f_down, F, state,
         ):  # fmt: skip
             return NEWTON_FAILED, s
-        for w in range(nw):
-            f = F[w]
-            for j in range(gw_idx.shape[1]):
-                q1[gw_idx[w, j]] -= gw_val[w, j] * f
         # track: forces on the window's nodes
         for r in range(2):
             for k in range(width):

@@ -1,0 +1,107 @@
+"""Runs side by side in the vector lanes give, to the bit, what each run gives alone.
+
+A run alone goes through the per-run loop (`central.advance`), each full group of `LANES`
+runs of one model through the lanes (`central.advance_lanes`): the same scheme, the same
+sums in the same order, so the stored arrays must be equal bit for bit (not merely close).
+The batches here hold a group and a run left over, which goes one by one.
+"""
+
+import copy
+
+import numpy as np
+import pytest
+
+from trackdyn.errors import TrackdynInputError
+from trackdyn.options import RunOptions
+from trackdyn.simulation import run_batch
+from trackdyn.solver import central
+from trackdyn.track.inputs import ContactInput
+from trackdyn.vehicle.models import MODELS
+from trackdyn.vehicle.parameters import load_vehicle
+
+V = load_vehicle("loaded")
+SOFT = load_vehicle("loaded", kp=0.7 * V.kp, mu=1.3 * V.mu)
+EMPTY = load_vehicle("empty")
+# one Newton pass allowed: wedges with a tiny C_slope never leave the stick state and need
+# no second pass, the default wedges fail at their first stick/slip change
+STICKY = load_vehicle("loaded", C_slope=1.0)
+
+
+def assert_alone(batch, vehicles, tracks, options, newton_max_iter=50):
+    """Each run of ``batch`` is what `run_batch` gives for that run alone, to the bit (or
+    the same error)."""
+    for r, v, trk, o in zip(batch, vehicles, tracks, options, strict=True):
+        (alone,) = run_batch([v], [trk], [o], newton_max_iter=newton_max_iter)
+        if isinstance(alone, Exception):
+            assert isinstance(r, TrackdynInputError)
+            assert str(r) == str(alone)
+            continue
+        assert alone.out.keys() == r.out.keys()
+        for name, a in alone.out.items():
+            np.testing.assert_array_equal(r.out[name], a, err_msg=name)
+
+
+def varied(model, n, **options):
+    """``n`` runs of ``model``: different vehicles, speeds (so different step counts and
+    time steps) and storage."""
+    vehicles = [(V, SOFT, EMPTY)[i % 3] for i in range(n)]
+    every = (1, 3, None)
+    runs = [
+        RunOptions(model=model, speed_kmh=50.0 + 5.0 * i, store_every=every[i % 3], **options)
+        for i in range(n)
+    ]
+    return vehicles, runs
+
+
+@pytest.mark.parametrize("model", MODELS)
+def test_lanes_give_each_run_alone(lin, model):
+    vehicles, options = varied(model, central.LANES + 1)
+    batch = run_batch(vehicles, lin, options)
+    assert not any(isinstance(r, Exception) for r in batch)
+    assert_alone(batch, vehicles, [lin] * len(batch), options)
+
+
+@pytest.mark.parametrize("model", ["2dof", "full"])
+def test_lanes_on_the_nonlinear_track(lin, model):
+    vehicles, options = varied(model, central.LANES + 1, nonlinear=True)
+    batch = run_batch(vehicles, lin, options)
+    assert_alone(batch, vehicles, [lin] * len(batch), options)
+
+
+def test_two_groups_of_lanes(lin):
+    vehicles, options = varied("2dof", 2 * central.LANES + 1)
+    batch = run_batch(vehicles, lin, options)
+    assert_alone(batch, vehicles, [lin] * len(batch), options)
+
+
+def test_a_lane_whose_newton_fails_stops_alone(lin):
+    # the loaded wagon's wedges (runs 1 and 4) fail part way, the sticky ones at some
+    # speeds, later or not at all
+    vehicles = [V if i in (1, 4) else STICKY for i in range(central.LANES)]
+    options = [RunOptions(speed_kmh=50.0 + 5.0 * i, store_every=2) for i in range(central.LANES)]
+    batch = run_batch(vehicles, lin, options, newton_max_iter=1)
+    failed = [isinstance(r, TrackdynInputError) for r in batch]
+    assert failed[1] and failed[4] and not all(failed)
+    assert "did not converge" in str(batch[1])
+    assert_alone(batch, vehicles, [lin] * len(batch), options, newton_max_iter=1)
+
+
+def test_a_non_finite_lane_stops_alone(lin, monkeypatch):
+    # the track input of the second run turns NaN from 40 m on
+    bad = copy.copy(lin)
+    sample = ContactInput.__call__
+
+    def broken(self, centre):
+        k, r, table = sample(self, centre)
+        if self.lin is bad:
+            r[centre >= 40.0] = np.nan
+        return k, r, table
+
+    monkeypatch.setattr(ContactInput, "__call__", broken)
+    vehicles, options = varied("11dof", central.LANES)
+    tracks = [bad if i == 1 else lin for i in range(central.LANES)]
+    batch = run_batch(vehicles, tracks, options)
+    for i, r in enumerate(batch):
+        assert isinstance(r, TrackdynInputError) == (i == 1)
+    assert "non-finite displacements" in str(batch[1])
+    assert_alone(batch, vehicles, tracks, options)
