@@ -40,7 +40,7 @@ Bathe, K.J. (1996). Finite Element Procedures. Prentice Hall, Englewood Cliffs, 
 from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit, prange
@@ -83,7 +83,9 @@ FASTMATH = {"nnan", "ninf", "nsz", "contract", "afn"}
 """LLVM's fast-math flags of the loops: all but reassociation, so that a run's sums are
 done in the same order alone and in the lanes (the same results, to the bit)."""
 
-STEP_JIT = dict(cache=True, fastmath=FASTMATH, error_model="numpy", nogil=True, _nrt=False)
+STEP_JIT: dict[str, Any] = dict(
+    cache=True, fastmath=FASTMATH, error_model="numpy", nogil=True, _nrt=False
+)
 """numba options of the helpers the loops call at every step (`vehicle_step`,
 `store_vehicle`): compiled without numba's reference counting (they allocate nothing), so
 that a call does not count a reference to each of its arrays, which cost more than the
@@ -723,14 +725,14 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> 
             if first + block < firsts.stop:
                 ahead = pool.submit(sample, first + block)
             row0 = rows[:-1] + (first + per_run["every"] - 1) // per_run["every"]
-            if n_groups:
-                advance_groups(
+            if n_groups:  # mypy cannot match star-args to a compiled function's arity
+                advance_groups(  # type: ignore[call-arg]
                     *lane_mats, lane["static"], k, r, table, lane["y_start"], lane["y_step"],
                     count, lane_z, lane["dt"], first, lane["every"], newton_max_iter,
                     in_lanes(row0, take), *flat.values(), lane_status,
                 )  # fmt: skip
             if in_groups < runs:
-                advance_runs(
+                advance_runs(  # type: ignore[call-arg]
                     *run_mats, per_run["static"][one], k1, r1, table1, per_run["y_start"][one],
                     per_run["y_step"][one], in_start, z[one], per_run["dt"][one], first,
                     per_run["every"][one], newton_max_iter, row0[one], *flat.values(),
