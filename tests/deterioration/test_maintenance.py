@@ -117,10 +117,12 @@ def test_threshold_policy_waits_the_minimum_interval_and_takes_neighbours(track)
 
 def test_segments_past_the_alert_limit_go_with_one_that_is_due(track):
     m = _maintenance(track, alert_fraction=0.8)  # alert limit 0.8 x 1.6 = 1.28 mm (not the default)
-    sd = np.array([[1.3, 0.5, 1.2, 0.5], [0.5, 0.5, 0.5, 0.5]])
+    sd = np.array([[1.3, 0.5, 1.3, 1.3], [0.5, 0.5, 0.5, 0.5]])
     assert m.due(1.0, sd).size == 0  # past the alert limit, but nothing is due
     sd[1, 3] = 1.6
-    np.testing.assert_array_equal(m.due(1.0, sd), [0, 3])  # 1.2 < 1.28 stays
+    np.testing.assert_array_equal(m.due(1.0, sd), [2, 3])  # 0 is not next to the stretch
+    sd[0, 1] = 1.29
+    np.testing.assert_array_equal(m.due(1.0, sd), [0, 1, 2, 3])  # now it is
 
 
 @pytest.mark.slow

@@ -259,12 +259,10 @@ def test_fixing_the_example_soft_spot_lengthens_its_segment_interval(tmp_path):
     assert runner.invoke(app, args).exit_code == 0
     segments = pd.read_csv(out / "interventions_segments.csv")
     spot = segments[segments["segment_start_m"] == 200.5].set_index("alternative")
-    # measured: 2 tampings either way, the first at 2.7 MGT against 0.46, the interval
-    # 44.3 MGT against 43.1
+    # the example starts freshly tamped, so the first tamping ends the first interval;
+    # measured: one tamping either way in 50 MGT, at 16.1 MGT against 2.8
     assert spot.loc["soft-spot-fixed", "interventions"] <= spot.loc["base", "interventions"]
-    assert spot.loc["soft-spot-fixed", "first_mgt"] > spot.loc["base", "first_mgt"]
-    interval = spot["mean_interval_mgt"]
-    assert interval["soft-spot-fixed"] > interval["base"]
+    assert spot.loc["soft-spot-fixed", "first_mgt"] > 2 * spot.loc["base", "first_mgt"]
 
 
 def test_a_scenario_without_maintenance_is_refused(folder, tmp_path):

@@ -7,7 +7,8 @@ those that are due:
 - ``policy = "threshold"``: a segment whose D1 SD reaches the loop's
   ``threshold_sd_mm`` on either rail, at least ``min_interval_mgt`` after its last
   tamping; ``neighbours`` segments each side are tamped with it (the stretch around it),
-  and so is every segment past the alert limit (``alert_fraction`` of the threshold);
+  and so are the adjacent segments past the alert limit (``alert_fraction`` of the
+  threshold);
 - ``policy = "fixed"``: every segment every ``interval_mgt``.
 
 A segment tamped ``max_tampings`` times gets its ballast renewed at the next
@@ -107,9 +108,10 @@ class MaintenanceOptions(Strict):
     neighbours : int
         Segments each side tamped with a segment that is due [-]; default 0.
     alert_fraction : float
-        When a segment is due, every segment whose D1 SD has passed this fraction of the
-        threshold (the alert limit; the threshold is the intervention limit, EN 13848-5)
-        is tamped with it [-]; default 0.9, illustrative (1: only the segments due).
+        When a segment is due, the segments next to it whose D1 SD has passed this
+        fraction of the threshold (the alert limit; the threshold is the intervention
+        limit, EN 13848-5) are tamped with it, and theirs next to them [-]; default 0.9,
+        illustrative (1: only the segments due).
     max_tampings : int
         Tampings of a segment before its ballast is renewed [-]; default 6, illustrative.
     recovery_offset_mm, recovery_slope : float
@@ -239,9 +241,17 @@ class Maintenance:
         over = np.flatnonzero((worst >= self.threshold * (1 - DUE_MARGIN)) & ready)
         over = np.union1d(over, sorted(self.expected)).astype(int)
         self.expected = set()
-        if over.size:  # the machine is there: segments past the alert limit go with it
-            alert = np.flatnonzero((worst >= self.o.alert_fraction * self.threshold) & ready)
-            over = np.union1d(over, alert)
+        # the machine is there: the segments next to the stretch that are past the alert
+        # limit go with it, and theirs next to them
+        alert = (worst >= self.o.alert_fraction * self.threshold) & ready
+        chosen = np.isin(np.arange(worst.size), over)
+        for order in (slice(None), slice(None, None, -1)):  # grow right, then left
+            grown, run = chosen[order].copy(), False
+            for i, (c, a) in enumerate(zip(chosen[order], alert[order], strict=True)):
+                run = c or (run and a)
+                grown[i] = run
+            chosen[order] = grown
+        over = np.flatnonzero(chosen)
         k = self.o.neighbours
         near = {j for i in over for j in range(i - k, i + k + 1) if 0 <= j < self.starts.size}
         return np.array(sorted(near), dtype=int)
