@@ -201,7 +201,7 @@ def test_a_transition_needs_several_times_the_tamping_of_open_track():
     """Embankment 60 kN/mm -> deck 240 kN/mm with approach zones, the shipped parameters of
     each kind, 150 MGT: the segment holding the transition is tamped more than twice as
     often as open track (Dutch transitions are maintained 4-8 times as often, Wang, Markine
-    & Liu 2017; measured here: 29 against 8)."""
+    & Liu 2017; measured here: 27 against 8)."""
     from trackdyn.deterioration import Zone
     from trackdyn.track.synthetic import Transition
 
