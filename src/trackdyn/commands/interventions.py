@@ -241,8 +241,9 @@ def compare(study: InterventionsStudy, names, datasets) -> tuple[pd.DataFrame, p
 
 
 def plot_comparison(table: pd.DataFrame, path, title: str) -> None:
-    """Bars per alternative: tampings (renewals hatched on top), mean interval [MGT],
-    life-cycle cost (the intervention's own cost hatched on top)."""
+    """Bars per alternative: tampings (renewals hatched on top), mean interval [MGT]
+    ("none" where no segment had two interventions), life-cycle cost (the intervention's
+    own cost hatched on top)."""
     panels = (
         ("tampings", "renewals", "tampings, renewals hatched [-]"),
         ("mean_interval_mgt", None, "mean interval [MGT]"),
@@ -258,6 +259,8 @@ def plot_comparison(table: pd.DataFrame, path, title: str) -> None:
         shown = hatched > 0
         ax.bar(names[shown], hatched[shown], bottom=(total - hatched)[shown], color=colours[shown],
                edgecolor="k", hatch="//")  # fmt: skip
+        for i in np.flatnonzero(np.isnan(total.to_numpy())):  # e.g. no two tampings
+            ax.annotate("none", (i, 0.0), ha="center", va="bottom", fontsize=8)
         ax.set_ylabel(label)
         ax.grid(axis="y", alpha=0.3)
         plt.setp(ax.get_xticklabels(), rotation=25, ha="right")
