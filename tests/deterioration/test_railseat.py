@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from trackdyn.beam.railseat import rest_state
+from trackdyn.beam.railseat import peak_per_sleeper, rest_state
 from trackdyn.beam.static import linear_supports, solve_beam
 from trackdyn.deterioration.ballast import Ballast
 from trackdyn.track.rails import rail_section
@@ -33,9 +33,10 @@ def independent(b, state, r, at, loads):
     return sol.support_force
 
 
-def wheel_forces(b, state, r, i):
-    """Rail-seat forces with the bogie's first wheel over sleeper ``i``: index, force."""
-    at = b.position[i] + WHEELS
+def wheel_forces(b, state, r, i, shift=0.0):
+    """Rail-seat forces with the bogie's first wheel ``shift`` beyond sleeper ``i``: index,
+    force."""
+    at = b.position[i] + shift + WHEELS
     index, force, _ = b.wheel_solve(r, state, np.array([i]), at[None, :], LOADS[None, :])
     return index[0], force[0]
 
@@ -52,8 +53,9 @@ def test_rest_state_matches_an_independent_fe_solve():
     assert 0 < np.count_nonzero(rest.closed) < gap.size  # some sleepers hang
 
 
+@pytest.mark.parametrize("shift", [0.0, 0.27])  # over a sleeper, and between two
 @pytest.mark.parametrize("void", [0.0, 1.0e-3])
-def test_wheel_forces_match_an_independent_fe_solve_and_sum_to_the_loads(void):
+def test_wheel_forces_match_an_independent_fe_solve_and_sum_to_the_loads(void, shift):
     """Windows of ±10 sleepers against the whole section; within 5 sleepers of the wheels
     the window's held ends change the forces by < 50 N (of 40-60 kN). The forces of the
     window sum to the wheel loads plus the self-weight carried there (rail over a sleeper
@@ -61,8 +63,8 @@ def test_wheel_forces_match_an_independent_fe_solve_and_sum_to_the_loads(void):
     b = ballast(None if void == 0.0 else void)
     state = b.initial
     i = int(np.argmin(np.abs(b.position - 30.0))) - 1  # the wheel over the void's neighbour
-    index, force = wheel_forces(b, state, 0, i)
-    full = independent(b, state, 0, b.position[i] + WHEELS, LOADS)
+    index, force = wheel_forces(b, state, 0, i, shift)
+    full = independent(b, state, 0, b.position[i] + shift + WHEELS, LOADS)
     near = np.abs(index - i) <= 5
     np.testing.assert_allclose(force[near], full[index[near]], atol=50.0)
     total = LOADS.sum() + b.beams[0].weight[index].sum()
@@ -101,3 +103,18 @@ def test_forces_do_not_depend_on_the_rest_states_solved_before():
     for a, b in zip(used.wheel_solve(0, state_used, centre, at, loads),
                     fresh.wheel_solve(0, state_fresh, centre, at, loads), strict=True):  # fmt: skip
         np.testing.assert_array_equal(a, b)
+
+
+def test_peak_per_sleeper_is_the_largest_force_of_each_sleeper():
+    """Against numpy's unbuffered ``maximum.at`` on the same rows; columns beyond the
+    section (index -1 and n) are dropped, a sleeper no row reaches gets 0."""
+    rng = np.random.default_rng(3)
+    n, rows, width = 40, 30, 21
+    index = rng.integers(-1, n + 1, (rows, width))
+    index[index == 7] = 8  # sleeper 7 is reached by no row
+    force = rng.uniform(0.0, 6e4, (rows, width))
+    expected = np.zeros(n)
+    inside = (index >= 0) & (index < n)
+    np.maximum.at(expected, index[inside], force[inside])
+    np.testing.assert_array_equal(peak_per_sleeper(index, force, n), expected)
+    assert peak_per_sleeper(index, force, n)[7] == 0.0

@@ -30,7 +30,7 @@ import numpy as np
 from numba import njit
 from scipy.linalg import solveh_banded
 
-from trackdyn.beam.elements import element_stiffness, hermite, stiffness_band
+from trackdyn.beam.elements import element_stiffness, stiffness_band
 from trackdyn.errors import TrackdynInputError
 
 MAX_SWEEPS = 60
@@ -163,8 +163,8 @@ class Windows:
         K = K[:, inner][:, :, inner]
         w, t = np.arange(0, 2 * self.width, 2), np.arange(1, 2 * self.width, 2)
         Ktt = K[:, t][:, :, t]
-        self.T = np.linalg.solve(Ktt, K[:, t][:, :, w]).transpose(0, 2, 1)  # Kwt Ktt^-1
-        self.S = K[:, w][:, :, w] - self.T @ K[:, t][:, :, w]  # condensed stiffness
+        self.T = np.linalg.solve(Ktt, K[:, t][:, :, w])  # Ktt^-1 Ktw, (n, W, W)
+        self.S = K[:, w][:, :, w] - K[:, w][:, :, t] @ self.T  # condensed stiffness
         self.index = np.arange(n)[:, None] + np.arange(self.width)[None, :] + 1  # padded
         self._rest: RailRest | None = None  # the rest state the inverses below belong to
         self._closed: np.ndarray | None = None  # its closed supports per window
@@ -180,24 +180,12 @@ class Windows:
         position, load : ndarray, shape (B, L)
             Load positions [m] and loads [N]; loads outside the window are dropped.
         """
-        B, W = centre.size, self.width
-        x = self.x[centre]  # (B, W + 2)
-        e = np.clip(np.sum(x[:, None, :] <= position[:, :, None], axis=2) - 1, 0, W)
-        length = np.take_along_axis(x, e + 1, 1) - np.take_along_axis(x, e, 1)
-        s = (position - np.take_along_axis(x, e, 1)) / length
-        inside = (s >= 0) & (s <= 1)
-        shape = hermite(np.clip(s, 0, 1), length) * np.where(inside, load, 0.0)  # (4, B, L)
-        ndof = 2 * (W + 2)
-        dof = np.arange(B)[None, :, None] * ndof + 2 * e[None] + np.arange(4)[:, None, None]
-        full = np.bincount(dof.ravel(), shape.ravel(), B * ndof).reshape(B, ndof)
-        fw, ft = full[:, 2:-2:2], full[:, 3:-2:2]
-        return fw - _gathered_matvec(self.T, centre, np.ascontiguousarray(ft))
+        return _condensed_loads(self.x, self.T, centre, position, load)
 
-    def _window_values(self, rest: RailRest, centre):
-        """Stiffness, gap, rest deflection and rest force of each row's window, (B, W)."""
-        b, index = self.beam, self.index[centre]
-        return tuple(b.padded(v)[index] for v in (b.stiffness, rest.gap, rest.deflection,
-                                                   rest.force))  # fmt: skip
+    def _padded_values(self, rest: RailRest):
+        """Stiffness, gap and rest deflection per sleeper, padded (`RailBeam.padded`)."""
+        b = self.beam
+        return tuple(b.padded(v) for v in (b.stiffness, rest.gap, rest.deflection))
 
     def _inverses(self, rest: RailRest) -> np.ndarray:
         """Inverse window matrices with the rest state's closed supports, (n, W, W) [m/N].
@@ -206,7 +194,7 @@ class Windows:
         state; settlement changes few of them from step to step.
         """
         if self._rest is not rest:
-            k, g, u0, _ = self._window_values(rest, np.arange(self.beam.position.size))
+            k, g, u0 = (v[self.index] for v in self._padded_values(rest))
             closed = u0 > g
             if self._rest is None:
                 self._inverse = np.empty_like(self.S)
@@ -247,42 +235,85 @@ class Windows:
         deflection : ndarray, shape (B, W)
             Total rail deflection [m].
         """
-        k, g, u0, f0 = self._window_values(rest, centre)
         inverse = self._inverses(rest)
-        base = _gathered_matvec(inverse, centre, force + f0 - k * (u0 > g) * (u0 - g))
-        v, unsettled = _window_solve(inverse, centre, k, g, u0, base, MAX_SWEEPS)
+        k, g, u0 = self._padded_values(rest)
+        support, y, unsettled = _window_solve(inverse, centre, k, g, u0, force, MAX_SWEEPS)
         if unsettled:
             raise TrackdynInputError(
                 f"rail-seat forces: the contact of {unsettled} wheel positions did not settle "
                 f"in {MAX_SWEEPS} iterations"
             )
-        y = u0 + v
-        return self.index[centre] - (self.beam.half + 1), k * np.maximum(y - g, 0.0), y
+        return self.index[centre] - (self.beam.half + 1), support, y
 
 
 @njit(cache=True, nogil=True)
-def _gathered_matvec(mats, which, vecs):
-    """``mats[which[b]] @ vecs[b]`` for every row ``b``, without gathering the matrices."""
-    B, (R, C) = vecs.shape[0], mats.shape[1:]
-    out = np.empty((B, R))
+def _condensed_loads(x, coupling, centre, position, load):
+    """Condensed nodal forces ``f_w - Tᵀ f_t`` of point loads on each row's window, (B, W)
+    [N]: each load's consistent nodal forces (`trackdyn.beam.elements.hermite`) on the two
+    nodes of its element, the held end nodes dropped, and the rotations' part carried onto
+    the deflections by ``T = Ktt⁻¹ Ktw`` (``coupling``, (n, W, W)); loads outside the
+    window are dropped."""
+    B, L = position.shape
+    W = x.shape[1] - 2
+    out = np.zeros((B, W))
     for b in range(B):
-        m = mats[which[b]]
-        for i in range(R):
-            acc = 0.0
-            for j in range(C):
-                acc += m[i, j] * vecs[b, j]
-            out[b, i] = acc
+        xb, tb = x[centre[b]], coupling[centre[b]]
+        for a in range(L):
+            p = position[b, a]
+            if not (xb[0] <= p <= xb[W + 1]):
+                continue
+            e = 0
+            while e < W and xb[e + 1] <= p:
+                e += 1
+            length = xb[e + 1] - xb[e]
+            s = (p - xb[e]) / length
+            s2, q = s * s, load[b, a]
+            w = ((1 - 3 * s2 + 2 * s2 * s) * q, (3 * s2 - 2 * s2 * s) * q)
+            t = (length * (s - 2 * s2 + s2 * s) * q, length * (s2 * s - s2) * q)
+            for side in range(2):
+                node = e + side  # 1 .. W are the window's free nodes
+                if node < 1 or node > W:
+                    continue
+                out[b, node - 1] += w[side]
+                for i in range(W):
+                    out[b, i] -= tb[node - 1, i] * t[side]
     return out
 
 
 @njit(cache=True, nogil=True)
-def _window_solve(inverse, centre, k, g, u0, base, max_sweeps):
-    """Deflection change of each row's window, its supports iterated.
+def _gauss_solve(c, z, m):
+    """Solve ``c[:m, :m] y = z[:m]`` in place (``z`` becomes ``y``): Gaussian elimination
+    with partial pivoting, no allocation."""
+    for col in range(m):
+        pivot = col
+        for r in range(col + 1, m):
+            if abs(c[r, col]) > abs(c[pivot, col]):
+                pivot = r
+        if pivot != col:
+            for q in range(m):
+                c[col, q], c[pivot, q] = c[pivot, q], c[col, q]
+            z[col], z[pivot] = z[pivot], z[col]
+        for r in range(col + 1, m):
+            f = c[r, col] / c[col, col]
+            for q in range(col, m):
+                c[r, q] -= f * c[col, q]
+            z[r] -= f * z[col]
+    for r in range(m - 1, -1, -1):
+        acc = z[r]
+        for q in range(r + 1, m):
+            acc -= c[r, q] * z[q]
+        z[r] = acc / c[r, r]
 
-    Row ``b`` solves ``(A + diag(k closed)) v = rhs - k closed (u0 - g)`` on window
-    ``centre[b]`` from ``base = A^-1 (rhs - k closed0 (u0 - g))``, ``A^-1 =
-    inverse[centre[b]]`` (symmetric) being the inverse with the rest state's closed
-    supports ``closed0 = u0 > g``. A row whose supports ``u0 + v > g`` differ from
+
+@njit(cache=True, nogil=True)
+def _window_solve(inverse, centre, k, g, u0, force, max_sweeps):
+    """Support force and rail deflection of each row's window, its supports iterated.
+
+    Row ``b`` solves ``(A + diag(k closed)) v = force[b] - k closed (u0 - g)`` on window
+    ``centre[b]`` (padded sleepers ``centre[b] + 1`` onwards of ``k``, ``g``, ``u0``) from
+    ``base = A^-1 force[b]``, ``A^-1 = inverse[centre[b]]`` (symmetric) being the inverse
+    with the rest state's closed supports ``closed0 = u0 > g`` (at rest their forces
+    balance ``k closed0 (u0 - g)``). A row whose supports ``u0 + v > g`` differ from
     ``closed0`` in ``m`` of them is solved by the Woodbury identity, ``U`` the unit
     columns of those supports and ``D`` their change of stiffness (``±k``):
     ``x0 = base - A^-1 U D U^T (u0 - g)``, ``(I + D U^T A^-1 U) z = D U^T x0``,
@@ -290,25 +321,36 @@ def _window_solve(inverse, centre, k, g, u0, base, max_sweeps):
 
     Returns
     -------
-    v : ndarray, shape (B, W)
-        Deflection change from the rest state [m].
+    support_force : ndarray, shape (B, W)
+        Total support force, rest state included [N].
+    deflection : ndarray, shape (B, W)
+        Total rail deflection ``u0 + v`` [m].
     unsettled : int
         Rows whose set of closed supports still changed after ``max_sweeps`` solves.
     """
-    B, W = base.shape
-    v = base.copy()
+    B, W = force.shape
+    support, deflection = np.empty((B, W)), np.empty((B, W))
     closed0, closed = np.empty(W, np.bool_), np.empty(W, np.bool_)
     idx = np.empty(W, np.int64)
+    kb, gb, ub, base = np.empty(W), np.empty(W), np.empty(W), np.empty(W)
+    v, d, z, c = np.empty(W), np.empty(W), np.empty(W), np.empty((W, W))
     unsettled = 0
     for b in range(B):
-        inv = inverse[centre[b]]
+        inv, first = inverse[centre[b]], centre[b] + 1
         for j in range(W):
-            closed0[j] = u0[b, j] > g[b, j]
-        closed[:] = closed0
+            kb[j], gb[j], ub[j] = k[first + j], g[first + j], u0[first + j]
+            closed0[j] = ub[j] > gb[j]
+            closed[j] = closed0[j]
+        for i in range(W):
+            acc = 0.0
+            for j in range(W):
+                acc += inv[i, j] * force[b, j]
+            base[i] = acc
+            v[i] = acc
         for sweep in range(max_sweeps + 1):
             same = True
             for j in range(W):
-                now = u0[b, j] + v[b, j] > g[b, j]
+                now = ub[j] + v[j] > gb[j]
                 same = same and now == closed[j]
                 closed[j] = now
             if same:
@@ -321,25 +363,49 @@ def _window_solve(inverse, centre, k, g, u0, base, max_sweeps):
                 if closed[j] != closed0[j]:
                     idx[m] = j
                     m += 1
-            x0 = base[b].copy()
-            d = np.empty(m)
+            for i in range(W):
+                v[i] = base[i]
             for a in range(m):
                 j = idx[a]
-                d[a] = k[b, j] if closed[j] else -k[b, j]
-                e = d[a] * (u0[b, j] - g[b, j])
+                d[a] = kb[j] if closed[j] else -kb[j]
+                e = d[a] * (ub[j] - gb[j])
                 for i in range(W):
-                    x0[i] -= inv[j, i] * e
-            if m > 0:
-                c = np.eye(m)
-                rhs = np.empty(m)
-                for a in range(m):
-                    for q in range(m):
-                        c[a, q] += d[a] * inv[idx[a], idx[q]]
-                    rhs[a] = d[a] * x0[idx[a]]
-                z = np.linalg.solve(c, rhs)
-                for a in range(m):
-                    for i in range(W):
-                        x0[i] -= inv[idx[a], i] * z[a]
-            for i in range(W):
-                v[b, i] = x0[i]
-    return v, unsettled
+                    v[i] -= inv[j, i] * e
+            for a in range(m):
+                for q in range(m):
+                    c[a, q] = d[a] * inv[idx[a], idx[q]]
+                c[a, a] += 1.0
+                z[a] = d[a] * v[idx[a]]
+            _gauss_solve(c, z, m)
+            for a in range(m):
+                for i in range(W):
+                    v[i] -= inv[idx[a], i] * z[a]
+        for j in range(W):
+            y = ub[j] + v[j]
+            deflection[b, j] = y
+            support[b, j] = kb[j] * max(y - gb[j], 0.0)
+    return support, deflection, unsettled
+
+
+@njit(cache=True, nogil=True)
+def peak_per_sleeper(index, force, n: int):
+    """Largest support force of each sleeper over the rows of `Windows.solve`, (n,) [N]
+    (0 where no row reaches it; columns beyond the section dropped).
+
+    Parameters
+    ----------
+    index : ndarray, shape (B, W)
+        Sleeper of each column.
+    force : ndarray, shape (B, W)
+        Support force [N].
+    n : int
+        Sleepers of the section.
+    """
+    out = np.zeros(n)
+    B, W = index.shape
+    for b in range(B):
+        for j in range(W):
+            i = index[b, j]
+            if 0 <= i < n and force[b, j] > out[i]:
+                out[i] = force[b, j]
+    return out

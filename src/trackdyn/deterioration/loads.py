@@ -30,6 +30,7 @@ import time
 
 import numpy as np
 
+from trackdyn.beam.railseat import peak_per_sleeper
 from trackdyn.errors import TrackdynInputError
 from trackdyn.simulation import run_batch, time_step
 from trackdyn.solver.discrete import stable_step
@@ -107,10 +108,9 @@ def passage_loads(run, ballast, state, model) -> np.ndarray:
         index, force, _ = ballast.wheel_solve(
             r, state, sleeper, np.concatenate(rows_pos), np.concatenate(rows_load)
         )
-        inside = (index >= 0) & (index < n)
         for k, (j, _, _) in enumerate(mine):
             rows = slice(k * n, (k + 1) * n)
-            np.maximum.at(out[j], index[rows][inside[rows]], force[rows][inside[rows]])
+            out[j] = peak_per_sleeper(index[rows], force[rows], n)
     return out
 
 
