@@ -8,7 +8,7 @@ import pytest
 from trackdyn.deterioration.accumulation import memory
 from trackdyn.deterioration.law_files import law_bounds, load_law, zone_kinds
 from trackdyn.deterioration.loop import step_size
-from trackdyn.deterioration.settlement import LAWS, PowerLaw, SatoLaw, ShentonLaw
+from trackdyn.deterioration.settlement import LAWS, PowerLaw, SatoLaw, ShentonLaw, harmonic
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import read_toml
 
@@ -220,6 +220,17 @@ def test_bad_law_name_value_and_file(tmp_path):
         load_law("power", gamma=1.0)
     with pytest.raises(TrackdynInputError, match="cannot read the file"):
         load_law("power", tmp_path / "missing.toml")
+
+
+@pytest.mark.parametrize("beta", [0.2, 0.6, 0.82, 0.95])
+def test_harmonic_is_the_sum_of_its_terms(beta):
+    """``S(n) = sum_{k=1}^{n} k^-beta`` summed term by term, within the 1e-9 its docstring
+    states, on both sides of the shift to 9 and far beyond; below one cycle ``S(h) = h``."""
+    n = np.array([1, 2, 8, 9, 10, 123, 100_000])
+    terms = np.cumsum(np.arange(1, n[-1] + 1, dtype=float) ** -beta)
+    np.testing.assert_allclose(harmonic(n, beta), terms[n - 1], rtol=1e-9)
+    np.testing.assert_array_equal(harmonic(np.array([0.0, 0.25, 0.999]), beta), [0, 0.25, 0.999])
+    assert harmonic(np.ones((2, 3)), beta).shape == (2, 3)
 
 
 def test_varandas_closed_forms():

@@ -27,8 +27,9 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+from numba import njit
 
-from trackdyn.deterioration.settlement import VarandasLaw, harmonic
+from trackdyn.deterioration.settlement import VarandasLaw, harmonic, harmonic_one, hurwitz_zeta
 
 LOAD_GRID = 500.0
 """Cell width of the load histogram of `LoadHistory` [N]."""
@@ -158,8 +159,12 @@ class LoadHistory(Hardening):
         def to_seats(values):
             return np.bincount(flat, values, minlength=self.N.size).reshape(shape)
 
+        def total_increment(dm):
+            seats = _seat_increment(h, rk, wk, base, flat, float(dm), law.beta, self.N.size)
+            return scale * seats.reshape(shape)
+
         self._increment = lambda dm: np.array([to_seats(s * each(dm)) for s in shares])
-        return lambda dm: to_seats(each(dm))
+        return total_increment
 
     def advance(self, dm: float) -> np.ndarray:
         assert self._increment is not None, "prepare comes first"
@@ -221,3 +226,14 @@ class Zoned:
         """See `Hardening.restart`."""
         for i, acc in self.parts:
             acc.restart(np.asarray(held)[:, i], mgt)
+
+
+@njit(cache=True, nogil=True)
+def _seat_increment(h, rate, weight, base, seat, dm, beta, size):
+    """``Σ_cells w_k (S(h_k + r_k ΔM) - S(h_k))`` of each rail seat (`LoadHistory`), the
+    cells' seats given by the flat index ``seat`` and ``S(h_k)`` by ``base`` [N^(α+1)]."""
+    zeta = hurwitz_zeta(beta, 1.0)
+    out = np.zeros(size)
+    for i in range(h.size):
+        out[seat[i]] += weight[i] * (harmonic_one(h[i] + rate[i] * dm, beta, zeta) - base[i])
+    return out

@@ -50,6 +50,7 @@ from dataclasses import dataclass, fields
 from typing import ClassVar
 
 import numpy as np
+from numba import njit
 
 from trackdyn.deterioration.hardening import Consolidation, Power
 from trackdyn.errors import TrackdynInputError
@@ -249,7 +250,8 @@ def harmonic(h, beta: float):
     ``S(h) = zeta(beta) - zeta(beta, h + 1)`` with the Hurwitz zeta function, from its
     Euler-Maclaurin expansion after shifting the argument to 9 or more (error below 1e-9
     relative for ``0 < beta < 1``); below one cycle ``S(h) = h``, linear up to the first
-    cycle (counting starts at whole cycles).
+    cycle (counting starts at whole cycles). Compiled: the Varandas law's increment
+    evaluates it on every cell of every rail seat's load histogram at each trial step.
 
     Parameters
     ----------
@@ -259,29 +261,38 @@ def harmonic(h, beta: float):
         Exponent, 0 < beta < 1 [-].
     """
     h = np.asarray(h, dtype=float)
-    whole = np.maximum(h, 1.0)
-    s = (_hurwitz(beta, 1.0)[0] - _hurwitz(beta, whole + 1.0)).reshape(h.shape)
-    return np.where(h < 1.0, h, s)
+    return _harmonic(h.ravel(), float(beta)).reshape(h.shape)
 
 
-def _hurwitz(s: float, a):
-    """Hurwitz zeta ``zeta(s, a)`` for 0 < s < 1, a >= 1, by analytic continuation."""
-    a = np.array(a, dtype=float, ndmin=1)
-    out = np.zeros_like(a)
-    small = a < 9.0
-    shift = np.zeros(np.count_nonzero(small))
-    q = a[small]
-    for _ in range(9):
-        shift += q**-s
-        q = q + 1.0
-    a[small] = q
-    inv2 = a**-2.0
-    p = a**-s  # a^-s; the other powers from it by products
-    tail = p * (a / (s - 1) + 0.5 + (s / 12) / a * (1 - inv2 * ((s + 1) * (s + 2) / 60
-            - inv2 * (s + 1) * (s + 2) * (s + 3) * (s + 4) / 2520)))  # fmt: skip
-    out[:] = tail
-    out[small] += shift
+@njit(cache=True, nogil=True)
+def _harmonic(h, beta):
+    """`harmonic` of a flat array."""
+    zeta = hurwitz_zeta(beta, 1.0)
+    out = np.empty(h.size)
+    for i in range(h.size):
+        out[i] = harmonic_one(h[i], beta, zeta)
     return out
+
+
+@njit(cache=True, nogil=True)
+def harmonic_one(h: float, beta: float, zeta: float) -> float:
+    """`harmonic` of one ``h``, compiled; ``zeta`` is ``hurwitz_zeta(beta, 1)`` [-]."""
+    return h if h < 1.0 else zeta - hurwitz_zeta(beta, h + 1.0)
+
+
+@njit(cache=True, nogil=True)
+def hurwitz_zeta(s: float, a: float) -> float:
+    """Hurwitz zeta ``zeta(s, a)`` for 0 < s < 1, a >= 1, by analytic continuation
+    (compiled; see `harmonic`)."""
+    shift = 0.0
+    if a < 9.0:
+        for _ in range(9):
+            shift += a**-s
+            a += 1.0
+    inv2 = a**-2.0
+    tail = a**-s * (a / (s - 1) + 0.5 + (s / 12) / a * (1 - inv2 * ((s + 1) * (s + 2) / 60
+                    - inv2 * (s + 1) * (s + 2) * (s + 3) * (s + 4) / 2520)))  # fmt: skip
+    return tail + shift
 
 
 @dataclass(frozen=True, kw_only=True)
