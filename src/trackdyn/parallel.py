@@ -34,15 +34,10 @@ def _client(workers: int | None, scheduler: str | None):
                 f"--scheduler {scheduler!r} is not an address like tcp://HOST:PORT ({exc})"
             ) from None
         return _connect(Client, scheduler), None
-    # Two Dask defaults made a run (1 km, 11-DOF) take 0.56-0.78 s in a worker instead of
-    # 0.38 s: MALLOC_TRIM_THRESHOLD_ turns off glibc's adaptive mmap threshold, so every
-    # large array is mmapped and page-faulted afresh; and the statistical profiler takes
-    # the GIL every 10 ms. Local workers run with neither.
-    settings = {
-        "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
-        "distributed.worker.profile.enabled": False,
-    }
-    with dask.config.set(settings):
+    # Dask's statistical profiler takes the GIL every 10 ms (a 1 km 11-DOF run took up to
+    # twice as long in a worker with it); local workers run without it. Dask's malloc
+    # setting is undone by each task (`keep_freed_memory`).
+    with dask.config.set({"distributed.worker.profile.enabled": False}):
         cluster = LocalCluster(
             n_workers=workers or os.cpu_count() or 1,
             threads_per_worker=1,
@@ -115,8 +110,47 @@ def shared_cluster(workers: int | None = None, scheduler: str | None = None):
             cluster.close()
 
 
+MMAP_THRESHOLD = 32 * 1024 * 1024
+"""Size from which glibc's malloc maps an allocation on its own [bytes]: the largest its
+adaptive threshold reaches on a 64-bit machine (glibc's ``DEFAULT_MMAP_THRESHOLD_MAX``)."""
+
+TRIM_THRESHOLD = 2 * MMAP_THRESHOLD
+"""Free memory at the top of glibc's heap kept for the next allocation [bytes] (glibc's
+adaptive rule keeps twice the mmap threshold)."""
+
+
+def keep_freed_memory() -> bool:
+    """Let glibc's malloc keep freed memory for the next allocation, as by default.
+
+    A Dask worker started by a nanny (``dask worker``, a real cluster) runs with
+    ``MALLOC_TRIM_THRESHOLD_=65536``, Dask's default: glibc then hands every freed block
+    over 64 KiB back to the system and maps every allocation over 128 KiB afresh, so each
+    array a step allocates page-faults again. One 1 km section through 50 MGT with
+    maintenance took 16.4 core-seconds under it, 6.2 of them in the kernel, with 2.0
+    million page faults; 8.1 core-seconds and 11 000 faults with this (8.6 without the
+    setting). Memory a task frees then stays with the worker process for its next task
+    (Dask reports it as unmanaged memory).
+
+    Returns
+    -------
+    bool
+        Whether the thresholds were set (only where the C library is glibc).
+    """
+    import ctypes
+    import platform
+
+    if platform.libc_ver()[0] != "glibc":
+        return False
+    libc = ctypes.CDLL(None)
+    m_trim_threshold, m_mmap_threshold = -1, -3  # glibc's malloc.h
+    return bool(libc.mallopt(m_mmap_threshold, MMAP_THRESHOLD)) and bool(
+        libc.mallopt(m_trim_threshold, TRIM_THRESHOLD)
+    )
+
+
 def _on_one_core(func, task):
-    """``func(task)`` in a Dask worker, numba's parallel loops on one thread.
+    """``func(task)`` in a Dask worker, numba's parallel loops on one thread, with glibc's
+    malloc keeping freed memory (`keep_freed_memory`).
 
     A worker process is one core's worth of work (Dask sets the same for the BLAS
     libraries); numba's thread count is per calling thread, so it is set here, in the
@@ -125,6 +159,7 @@ def _on_one_core(func, task):
     import numba
 
     numba.set_num_threads(1)
+    keep_freed_memory()
     return func(task)
 
 
