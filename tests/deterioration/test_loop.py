@@ -94,8 +94,15 @@ def fine(spot_track):
     return _at_50_mgt(spot_track, 0.25e-3)
 
 
-def test_halving_the_step_limit_changes_50_mgt_settlement_by_less_than_2_percent(spot_track, fine):
-    coarse = _at_50_mgt(spot_track, 0.5e-3)
+DEFAULT_LIMIT = LoopOptions().max_step_settlement
+
+
+def test_a_quarter_of_the_default_step_limit_changes_50_mgt_settlement_by_under_2_percent(
+    spot_track, fine
+):
+    """Measured: 1.2 % at most at any sleeper (8 steps against 28)."""
+    assert DEFAULT_LIMIT == 4 * 0.25e-3  # the fine run's limit is a quarter of the default
+    coarse = _at_50_mgt(spot_track, DEFAULT_LIMIT)
     assert fine.attrs["steps"] > coarse.attrs["steps"]
     e_coarse, e_fine = (r.settlement.isel(mgt=-1).values for r in (coarse, fine))
     assert np.max(np.abs(e_coarse - e_fine) / e_fine) < 0.02
@@ -104,8 +111,8 @@ def test_halving_the_step_limit_changes_50_mgt_settlement_by_less_than_2_percent
     # load updates within the step move it by a few per cent at most)
     e, pos = coarse.settlement.values, coarse.sleeper_distance.values
     change = [shape_change(e[k + 1] - e[k], pos).max() for k in range(1, e.shape[0] - 1)]
-    assert max(change) <= 0.5e-3 * 1.05
-    assert coarse.step_max_settlement.values[1:].max() > 0.5e-3  # even settlement is free
+    assert max(change) <= DEFAULT_LIMIT * 1.05
+    assert coarse.step_max_settlement.values[1:].max() > DEFAULT_LIMIT  # even settlement is free
 
 
 def _saw(e):

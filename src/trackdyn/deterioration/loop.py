@@ -116,7 +116,12 @@ class LoopOptions(Strict):
     max_step_settlement : float
         Largest change of the settlement's shape (less its moving mean over
         `SHAPE_WAVELENGTH`) of any sleeper in one step [m]; a sleeper's stable step
-        (`stable_settlement`) may keep the load updates within it shorter.
+        (`stable_settlement`) may keep the load updates within it shorter. Default 1 mm:
+        on the built-in example through 50 MGT the D1 SD of every segment is within
+        0.25 % of that with 0.25 mm steps (16 steps against 56), its 300 MGT life has the
+        same tampings within 0.3 MGT of 0.5 mm steps (103 steps against 165), and the
+        Varandas law takes 31 steps against its 161 at 0.5 mm (its D1 SD moving by up to
+        2 % between limits of 0.5, 1 and 2 mm, without a trend).
     snapshot_every_mgt : float
         Tonnage between stored geometry snapshots [MGT].
     threshold_sd_mm : float
@@ -171,7 +176,7 @@ class LoopOptions(Strict):
     model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
 
     total_mgt: float = 50.0
-    max_step_settlement: float = 0.5e-3
+    max_step_settlement: float = 1e-3
     snapshot_every_mgt: float = 10.0
     threshold_sd_mm: float = 1.6
     segment_length: float = 200.0
