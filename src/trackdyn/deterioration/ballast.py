@@ -315,8 +315,18 @@ class Ballast:
             Sleeper of each column (``-1`` .. ``n``: beyond the section), total support force
             [N] and rail deflection [m]; see `Windows.solve`.
         """
-        w = self.windows[r]
-        return w.solve(state.rails[r], centre, w.load_vector(centre, position, load))
+        return self.force_solve(r, state, centre, self.wheel_forces(r, centre, position, load))
+
+    def wheel_forces(self, r: int, centre, position, load) -> np.ndarray:
+        """Condensed nodal forces of wheel loads on rail ``r``'s windows, (B, W) [N]
+        (`Windows.load_vector`; arguments as `wheel_solve`). They do not depend on the
+        ballast state: the loads of a run can be placed once and solved on every state
+        (`force_solve`)."""
+        return self.windows[r].load_vector(centre, position, load)
+
+    def force_solve(self, r: int, state: BallastState, centre, force):
+        """`wheel_solve` for wheel loads already placed on the windows (`wheel_forces`)."""
+        return self.windows[r].solve(state.rails[r], centre, force)
 
     def _secant(self, state: BallastState, static_load: float):
         """Beam secant stiffness [N/m] and mean deflection [m] under ``Ps (1 ± δ)``."""

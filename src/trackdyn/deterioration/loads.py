@@ -72,8 +72,10 @@ def cycles_per_passage(model) -> np.ndarray:
     return np.array([model.axles_per_rail / per_rail[r] for _, _, r in wheels(model)])
 
 
-def passage_loads(run, ballast, state, model) -> np.ndarray:
-    """Load cycle of every wheel at every sleeper of its rail in one passage [N].
+def wheel_forces(run, ballast, model) -> list:
+    """The wheel loads of one passage placed on each rail's beam windows, for
+    `passage_loads`: for each wheel over each sleeper, every wheel of the vehicle on that
+    rail with the load its contact had at that moment of the run.
 
     Parameters
     ----------
@@ -81,21 +83,21 @@ def passage_loads(run, ballast, state, model) -> np.ndarray:
         The solved run (its vehicle centre positions and wheel loads).
     ballast : Ballast
         The section's rails and ballast.
-    state : BallastState
-        The current rest state.
     model : trackdyn.vehicle.assembly.Model
         The model of the run (its contacts' axles).
 
     Returns
     -------
-    ndarray
-        Shape (wheels, sleepers) [N], wheels in the order of `wheels`.
+    list of tuple
+        Per rail: the indices in `wheels` of its wheels, the sleeper under the wheel of
+        each row (wheel after wheel, every sleeper) and the rows' condensed nodal forces
+        (`Ballast.wheel_forces`) [N]. They do not change as the ballast settles.
     """
     pos = ballast.position
     n = pos.size
     centre = run.centre
     load = np.maximum(run.wheel_load, 0.0)
-    out = np.zeros((len(wheels(model)), n))
+    placed = []
     for r, rail in enumerate(RAILS):
         mine = [(j, c, x) for j, (c, x, rl) in enumerate(wheels(model)) if rl == rail]
         offsets = np.array([x for _, _, x in mine])
@@ -105,12 +107,36 @@ def passage_loads(run, ballast, state, model) -> np.ndarray:
             rows_pos.append(at[:, None] + offsets[None, :])
             rows_load.append(np.stack([np.interp(at, centre, load[:, c]) for _, c, _ in mine], 1))
         sleeper = np.tile(np.arange(n), len(mine))
-        index, force, _ = ballast.wheel_solve(
-            r, state, sleeper, np.concatenate(rows_pos), np.concatenate(rows_load)
-        )
-        for k, (j, _, _) in enumerate(mine):
+        force = ballast.wheel_forces(r, sleeper, np.concatenate(rows_pos),
+                                     np.concatenate(rows_load))  # fmt: skip
+        placed.append(([j for j, _, _ in mine], sleeper, force))
+    return placed
+
+
+def passage_loads(placed, ballast, state) -> np.ndarray:
+    """Load cycle of every wheel at every sleeper of its rail in one passage [N].
+
+    Parameters
+    ----------
+    placed : list of tuple
+        The passage's wheel loads on the beam windows (`wheel_forces`).
+    ballast : Ballast
+        The section's rails and ballast.
+    state : BallastState
+        The current rest state.
+
+    Returns
+    -------
+    ndarray
+        Shape (wheels, sleepers) [N], wheels in the order of `wheels`.
+    """
+    n = ballast.position.size
+    out = np.zeros((sum(len(mine) for mine, _, _ in placed), n))
+    for r, (mine, sleeper, force) in enumerate(placed):
+        index, support, _ = ballast.force_solve(r, state, sleeper, force)
+        for k, j in enumerate(mine):
             rows = slice(k * n, (k + 1) * n)
-            out[j] = peak_per_sleeper(index[rows], force[rows], n)
+            out[j] = peak_per_sleeper(index[rows], support[rows], n)
     return out
 
 
@@ -165,15 +191,16 @@ class StepLoads:
     """
 
     def __init__(self, run, model, ballast, state):
-        self.run, self.model, self.ballast, self.state = run, model, ballast, state
+        self.run, self.ballast, self.state = run, ballast, state
         self.dynamic = discrete_passage_loads(run, model)
-        self.start = passage_loads(run, ballast, state, model)
+        self.placed = wheel_forces(run, ballast, model)
+        self.start = passage_loads(self.placed, ballast, state)
 
     def at(self, state) -> np.ndarray:
         """Load cycles on ``state``, (wheels, sleepers) [N]."""
         if state is self.state:
             return self.dynamic
-        now = passage_loads(self.run, self.ballast, state, self.model)
+        now = passage_loads(self.placed, self.ballast, state)
         return np.maximum(self.dynamic + now - self.start, 0.0)
 
 
@@ -206,6 +233,7 @@ class TrafficRun:
         self.run = options.run.with_(speed_kmh=traffic.speed * 3.6, dt_s=dt, store_every=every)
         self.state = None  # the ballast state of its latest run on the discrete track
         self.step: StepLoads | None = None
+        self.placed: tuple | None = None  # (solved run, its `wheel_forces`)
 
 
 def vehicle_runs(runs, lins: list[LinearisedTrack], timing: dict, ballast=None,
@@ -258,7 +286,8 @@ def vehicle_runs(runs, lins: list[LinearisedTrack], timing: dict, ballast=None,
 def rail_seat_loads(runs, solved, ballast, state, timing: dict) -> list:
     """Load cycles of one passage of each vehicle, (wheels, sleepers) [N] per run.
 
-    The wheel loads of each run go onto the rail beam on ``state`` (`passage_loads`); a run
+    The wheel loads of each run go onto the rail beam on ``state`` (`passage_loads`; they are
+    placed on the beam windows once per run, `wheel_forces`, and solved on each state); a run
     on the discrete track gives them itself, redistributed by the rail beam as the ballast
     has settled since the run (`StepLoads`). Adds the seconds spent to ``timing["beam"]``.
 
@@ -279,7 +308,9 @@ def rail_seat_loads(runs, solved, ballast, state, timing: dict) -> list:
     loads = []
     for run, done in zip(runs, solved, strict=True):
         if run.run.track != "discrete":
-            loads.append(passage_loads(done, ballast, state, run.model))
+            if run.placed is None or run.placed[0] is not done:
+                run.placed = (done, wheel_forces(done, ballast, run.model))
+            loads.append(passage_loads(run.placed[1], ballast, state))
             continue
         if run.step is None or run.step.run is not done:
             run.step = StepLoads(done, run.model, ballast, run.state)
