@@ -18,6 +18,8 @@ quality levels - Plain line, switches and crossings. CEN, Brussels.
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 import pandas as pd
 from scipy import signal
@@ -108,9 +110,7 @@ def longitudinal_level(
             f"{at}distance spacing {dx:g} m is too coarse for band {label}: "
             f"need < {lam_min / 2:g} m"
         )
-    sos = signal.butter(
-        int(order), [1.0 / lam_max, 1.0 / lam_min], btype="bandpass", fs=1.0 / dx, output="sos"
-    )
+    sos = _bandpass(int(order), lam_min, lam_max, dx)
     padlen = min(zu.size - 1, int(np.ceil(lam_max / dx)))
     out = signal.sosfiltfilt(sos, zu, padtype="constant", padlen=padlen)
     return out if uniform else np.interp(x, xu, out)
@@ -161,3 +161,12 @@ def segment_sd(distance, level, segment_length: float = 200.0) -> pd.DataFrame:
         if hi - lo >= 2:
             sd[k] = np.std(v[lo:hi]) * 1e3
     return pd.DataFrame({"segment_start_m": starts, "segment_end_m": ends, "sd_mm": sd})
+
+
+@lru_cache(maxsize=64)
+def _bandpass(order: int, lam_min: float, lam_max: float, dx: float) -> np.ndarray:
+    """Second-order sections of the Butterworth band-pass of `longitudinal_level`, designed
+    once per band and spacing (the deterioration loop filters every step's profiles);
+    shared, so not to be changed by a caller."""
+    return signal.butter(order, [1.0 / lam_max, 1.0 / lam_min], btype="bandpass", fs=1.0 / dx,
+                         output="sos")  # fmt: skip
