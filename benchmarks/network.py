@@ -19,8 +19,8 @@ efficiency, the wall time of 1000 km through 300 MGT on 16 workers, against the 
 10 minutes (9600 core-seconds). The 20 km line runs through the whole 300 MGT (about 20
 minutes on 1 worker and 12 on 2 on a 2-core machine); only the 1000 km figure is
 extrapolated. Dask's nanny starts each worker with ``MALLOC_TRIM_THRESHOLD_=65536``, which
-the local cluster of `run_tasks` leaves out; with it a large share of the CPU is spent in
-the kernel, shown apart.
+each task undoes (`trackdyn.parallel.keep_freed_memory`); the CPU spent in the kernel is
+shown apart.
 
 Then, in this process: one 11-DOF run (`simulate`, loaded wagon) over a 500 m section
 (best of 5, before and after), and the deterioration of 4 sections of 500 m through 50 MGT
