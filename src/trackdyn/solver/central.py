@@ -750,9 +750,8 @@ def _sampled_blocks(sample, firsts: range, ahead: bool):
     """``(first, sample(first))`` for each block of steps. With ``ahead`` the next block's
     input is sampled in a thread while the compiled loop (which releases the GIL) advances
     this one: faster with a core to spare, as when numba may use more than one thread; a
-    Dask worker's task runs on one (`trackdyn.parallel`), and a second thread there only
-    takes turns with the loop (20 sections on 2 workers of 2 cores: 0.79 of the ideal
-    speed-up with it)."""
+    Dask worker's task runs on one (`trackdyn.parallel`), a core's worth of work, and a
+    second thread there only takes turns with the loop."""
     if not ahead:
         for first in firsts:
             yield first, sample(first)
