@@ -200,9 +200,11 @@ def test_wrong_traffic_fits_visibly_worse(folder, fitted, tmp_path):
     for name, out in (("right", fitted), ("wrong", tmp_path / "out")):
         t = pd.read_csv(out / "calibration.csv")
         misfit[name] = float(np.sqrt(np.mean(t[t.role == "fit"].misfit_rms_mm ** 2)))
-    # the estimated field takes up part of a wrong traffic's misfit: 1.40 times (measured;
-    # over 1.5 times with uniform ballast)
-    assert misfit["wrong"] > 1.25 * misfit["right"], misfit
+    # the estimated field and the law take up part of a wrong traffic's misfit: 1.18 times
+    # (measured, 0.146 against 0.124 mm: 1.39 times the misfit's variance; 1.38 times
+    # when the fit's Jacobian was held fixed each round and stopped short; over 1.5 times
+    # with uniform ballast)
+    assert misfit["wrong"] > 1.15 * misfit["right"], misfit
 
 
 BAD = {

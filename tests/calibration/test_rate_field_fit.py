@@ -77,7 +77,7 @@ def test_check_survey_is_predicted_with_the_field(fitted):
     table = pd.read_csv(out / "calibration.csv")
     check = table[table.role == "check"]
     error = np.sqrt(np.mean((check.d1_sd_predicted_mm - check.d1_sd_mm) ** 2))
-    assert error < 0.05, error  # issue 21's acceptance; 0.024, 0.034, 0.050 mm measured
+    assert error < 0.05, error  # issue 21's acceptance; 0.027, 0.035, 0.050 mm measured
 
 
 def test_estimated_field_follows_the_true_one(fitted):
@@ -88,7 +88,7 @@ def test_estimated_field_follows_the_true_one(fitted):
     smooth = [uniform_filter1d(np.log(f), window, axis=1) for f in (true_field, estimate)]
     inner = (position > position[0] + 15) & (position < position[-1] - 15)  # compared
     r = np.corrcoef(smooth[0][:, inner].ravel(), smooth[1][:, inner].ravel())[0, 1]
-    assert r >= 0.7, r  # issue 21's acceptance; 0.74, 0.84, 0.79 measured
+    assert r >= 0.7, r  # issue 21's acceptance; 0.76, 0.84, 0.78 measured
     se = field.standard_error.to_numpy()
     assert np.all(se > 0) and np.median(se) < 0.2
 
@@ -109,7 +109,7 @@ def test_global_parameters_move_along_the_ridge(fitted):
     ``K_s q^α (α δ + u)`` (``q`` the mean rail-seat load over Q_ref, ``δ`` the load's
     pattern in ``ln``, ``u`` the field's): a larger K_s with a smaller exponent and the
     field scaled with it predicts the same surveys, so the errors of the two have
-    opposite signs (+31 % and -16 %, -20 % and +30 %, -34 % and +30 %, measured)."""
+    opposite signs (+19 % and -10 %, -22 % and +33 %, -34 % and +30 %, measured)."""
     out, _, true_field = fitted
     errors = _errors(out, true_field)
     assert errors["K_s"] * errors["load_exponent"] < 0, errors
@@ -118,7 +118,7 @@ def test_global_parameters_move_along_the_ridge(fitted):
 @pytest.mark.xfail(
     strict=True,
     reason="issue 21's 10 % is not met: the ridge of "
-    "test_global_parameters_move_along_the_ridge, 16-34 % off (measured)",
+    "test_global_parameters_move_along_the_ridge, 10-34 % off (measured)",
 )
 def test_global_parameters_within_ten_percent(fitted):
     out, _, true_field = fitted
