@@ -13,8 +13,10 @@ files; and ``report.html``, all of it with the tables and figures in one page
 An interrupt (Ctrl-C, SIGTERM) ends the process at once with exit code 130: staging
 folders and output folders this process created are removed, child processes (local Dask
 workers) are killed. While files are being moved into place the interrupt waits for the
-move to finish (a few renames), so a folder never holds half of a run. A staging folder
-left by a process killed outright (SIGKILL) is removed by the next command writing there.
+move to finish (a few renames), so a folder never holds half of a run; one that comes
+after the move (while the command prints its summary) still exits 130 but leaves the
+finished outputs in place. A staging folder left by a process killed outright (SIGKILL)
+is removed by the next command writing there.
 """
 
 from __future__ import annotations
