@@ -16,8 +16,8 @@ while it ran the task, in core-seconds. Reported: wall time and core-seconds on 
 workers, core-seconds per km and per km x MGT, the speed-up from 1 to 2 workers, and,
 extrapolated from the 1-worker core-seconds per km x MGT and the 2-worker parallel
 efficiency, the wall time of 1000 km through 300 MGT on 16 workers, against the goal of
-10 minutes (9600 core-seconds). The 20 km line runs through the whole 300 MGT (about 20
-minutes on 1 worker and 12 on 2 on a 2-core machine); only the 1000 km figure is
+10 minutes (9600 core-seconds). The 20 km line runs through the whole 300 MGT (about 7
+minutes on 1 worker and 4 on 2 on a 2-core machine); only the 1000 km figure is
 extrapolated. Dask's nanny starts each worker with ``MALLOC_TRIM_THRESHOLD_=65536``, which
 each task undoes (`trackdyn.parallel.keep_freed_memory`); the CPU spent in the kernel is
 shown apart.
