@@ -37,12 +37,15 @@ OUTPUT_STEP = 1e-3
 frequencies of interest (body modes of 1-8 Hz, wheelset on track of 40-60 Hz)."""
 
 
-def time_step(model, lin: LinearisedTrack, speed: float) -> tuple[float, float, float]:
+def time_step(
+    model, lin: LinearisedTrack, speed: float, steps_per_period: float = STEPS_PER_PERIOD
+) -> tuple[float, float, float]:
     """Default time step, stability limit [s] and highest natural frequency [rad/s].
 
     The frequency is that of the model on the stiffest track along the path; the default
-    step gives `STEPS_PER_PERIOD` steps per its period and moves the vehicle no more than
-    half a geometry sample interval; the explicit scheme is stable below ``2 / ω_max``.
+    step gives ``steps_per_period`` (`STEPS_PER_PERIOD` unless a caller needs less)
+    steps per its period and moves the vehicle no more than half a geometry sample
+    interval; the explicit scheme is stable below ``2 / ω_max``.
     """
     k_max = np.array(
         [
@@ -52,7 +55,7 @@ def time_step(model, lin: LinearisedTrack, speed: float) -> tuple[float, float, 
     )
     omega = highest_frequency(model.M, model.K + model.Dc.T @ (k_max[:, None] * model.Dc))
     spacing = float(np.min(np.diff(lin.track.geometry.distance)))
-    dt = min(2 * np.pi / omega / STEPS_PER_PERIOD, 0.5 * spacing / speed)
+    dt = min(2 * np.pi / omega / steps_per_period, 0.5 * spacing / speed)
     return dt, 2.0 / omega, omega
 
 

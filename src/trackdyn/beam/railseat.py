@@ -342,11 +342,13 @@ def _window_solve(inverse, centre, k, g, u0, force, max_sweeps):
             closed0[j] = ub[j] > gb[j]
             closed[j] = closed0[j]
         for i in range(W):
-            acc = 0.0
-            for j in range(W):
-                acc += inv[i, j] * force[b, j]
-            base[i] = acc
-            v[i] = acc
+            base[i] = 0.0
+        for j in range(W):  # A^-1 is symmetric: its rows as columns, no serial sum
+            f = force[b, j]
+            for i in range(W):
+                base[i] += inv[j, i] * f
+        for i in range(W):
+            v[i] = base[i]
         for sweep in range(max_sweeps + 1):
             same = True
             for j in range(W):

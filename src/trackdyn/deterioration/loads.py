@@ -38,6 +38,14 @@ from trackdyn.track.discrete import DiscreteParameters, discrete_track
 from trackdyn.track.track import RAILS, LinearisedTrack
 from trackdyn.vehicle.models import build_model
 
+RUN_STEPS_PER_PERIOD = 25
+"""Time steps per period of the highest natural frequency in the loop's vehicle runs
+(unless ``[run] dt_s`` is given), half of `simulate`'s `STEPS_PER_PERIOD`: the loop needs
+the load cycles, not the last 0.1 % of the wheel load. Measured on the built-in example
+(11-DOF, 60 km/h) against steps of a quarter of this: the wheel loads within 0.32 %
+(loaded) and 0.86 % (empty wagon) of the static wheel load (RMS 0.008 and 0.021 %), the
+50 MGT D1 SD of every segment within 0.003 %, at half the vehicle runs' cost."""
+
 
 def wheels(model) -> list[tuple[int, float, str]]:
     """(contact index, axle position ahead of the centre [m], rail) of every wheel."""
@@ -224,7 +232,8 @@ class TrafficRun:
         self.model = build_model(options.run.model, traffic.vehicle)
         self.weights = cycles_per_passage(self.model) * traffic.passages_per_mgt
         self.rails = [RAILS.index(r) for _, _, r in wheels(self.model)]
-        dt = options.run.dt_s or time_step(self.model, lin, traffic.speed)[0]
+        per_period = RUN_STEPS_PER_PERIOD
+        dt = options.run.dt_s or time_step(self.model, lin, traffic.speed, per_period)[0]
         self.discrete = DiscreteParameters(rail=options.rail, sleeper_mass=options.sleeper_mass)
         if options.run.track == "discrete" and options.run.dt_s is None:
             load = traffic.vehicle.static_wheel_load
