@@ -167,6 +167,7 @@ class Windows:
         self.S = K[:, w][:, :, w] - K[:, w][:, :, t] @ self.T  # condensed stiffness
         self.index = np.arange(n)[:, None] + np.arange(self.width)[None, :] + 1  # padded
         self._rest: RailRest | None = None  # the rest state the inverses below belong to
+        self._flips = np.zeros(n, np.int64)  # rank-one changes since formed in full
         self._closed: np.ndarray | None = None  # its closed supports per window
         self._inverse = np.empty((0, self.width, self.width))  # sized at the first rest state
 
@@ -190,21 +191,25 @@ class Windows:
     def _inverses(self, rest: RailRest) -> np.ndarray:
         """Inverse window matrices with the rest state's closed supports, (n, W, W) [m/N].
 
-        Formed for the windows whose closed supports differ from those of the last rest
-        state; settlement changes few of them from step to step.
+        Formed in full at the first rest state; after that, each support that opened or
+        closed since the last rest state is a rank-one change of the windows that hold it
+        (`_flip_supports`, Sherman-Morrison), and a window is formed in full again after
+        `MAX_FLIPS` of them (round-off).
         """
         if self._rest is not rest:
             k, g, u0 = (v[self.index] for v in self._padded_values(rest))
             closed = u0 > g
             if self._rest is None:
-                self._inverse = np.empty_like(self.S)
-                redo = np.arange(closed.shape[0])
+                A = self.S.copy()
+                A[:, np.arange(self.width), np.arange(self.width)] += k * closed
+                self._inverse = np.linalg.inv(A)
             else:
-                redo = np.flatnonzero(np.any(closed != self._closed, axis=1))
-            if redo.size:
-                A = self.S[redo]
-                A[:, np.arange(self.width), np.arange(self.width)] += (k * closed)[redo]
-                self._inverse[redo] = np.linalg.inv(A)
+                redo = _flip_supports(self._inverse, self._closed, closed, k, self._flips,
+                                      MAX_FLIPS)  # fmt: skip
+                if redo.size:
+                    A = self.S[redo]
+                    A[:, np.arange(self.width), np.arange(self.width)] += (k * closed)[redo]
+                    self._inverse[redo] = np.linalg.inv(A)
             self._rest, self._closed = rest, closed
         return self._inverse
 
@@ -280,6 +285,47 @@ def _condensed_loads(x, coupling, centre, position, load):
     return out
 
 
+MAX_FLIPS = 32
+"""Rank-one changes of a window's inverse (`_flip_supports`) before it is formed again."""
+
+
+@njit(cache=True, nogil=True)
+def _flip_supports(inverse, before, after, k, flips, max_flips):
+    """Update each window's inverse for the supports that opened or closed, in place.
+
+    Closing support ``j`` of stiffness ``k`` adds ``d = k`` at ``(j, j)``, opening it
+    ``d = -k``: ``A'^-1 = A^-1 - d c cᵀ / (1 + d c_j)``, ``c`` the column ``j`` of the
+    symmetric ``A^-1`` (Sherman-Morrison; ``1 + d c_j > 0`` as the window stays positive
+    definite with its ends held). Returns the windows with more than ``max_flips``
+    changes since they were last formed in full (``flips`` counts them), left for the
+    caller to form again.
+    """
+    n, W = before.shape
+    col = np.empty(W)
+    again = np.zeros(n, np.bool_)
+    for w in range(n):
+        for j in range(W):
+            if before[w, j] == after[w, j]:
+                continue
+            flips[w] += 1
+            if flips[w] > max_flips:
+                again[w] = True
+                break
+            inv = inverse[w]
+            d = k[w, j] if after[w, j] else -k[w, j]
+            for i in range(W):
+                col[i] = inv[i, j]
+            f = d / (1.0 + d * col[j])
+            for a in range(W):
+                ca = f * col[a]
+                for b in range(W):
+                    inv[a, b] -= ca * col[b]
+    redo = np.flatnonzero(again)
+    for w in redo:
+        flips[w] = 0
+    return redo
+
+
 @njit(cache=True, nogil=True)
 def _gauss_solve(c, z, m):
     """Solve ``c[:m, :m] y = z[:m]`` in place (``z`` becomes ``y``): Gaussian elimination
@@ -350,12 +396,12 @@ def _window_solve(inverse, centre, k, g, u0, force, max_sweeps):
         for i in range(W):
             v[i] = base[i]
         for sweep in range(max_sweeps + 1):
-            same = True
+            changed = 0  # counted, not branched on
             for j in range(W):
                 now = ub[j] + v[j] > gb[j]
-                same = same and now == closed[j]
+                changed += now != closed[j]
                 closed[j] = now
-            if same:
+            if changed == 0:
                 break
             if sweep == max_sweeps:
                 unsettled += 1

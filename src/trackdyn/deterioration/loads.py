@@ -98,8 +98,10 @@ def wheel_forces(run, ballast, model) -> list:
     -------
     list of tuple
         Per rail: the indices in `wheels` of its wheels, the sleeper under the wheel of
-        each row (wheel after wheel, every sleeper) and the rows' condensed nodal forces
-        (`Ballast.wheel_forces`) [N]. They do not change as the ballast settles.
+        each row (sleeper after sleeper, each of those wheels over it in turn: a beam
+        window's rows follow each other, so its inverse is read once) and the rows'
+        condensed nodal forces (`Ballast.wheel_forces`) [N]. They do not change as the
+        ballast settles.
     """
     pos = ballast.position
     n = pos.size
@@ -113,10 +115,12 @@ def wheel_forces(run, ballast, model) -> list:
         for _, _, x in mine:  # that wheel over each sleeper
             at = pos - x  # vehicle centre [m]
             rows_pos.append(at[:, None] + offsets[None, :])
-            rows_load.append(np.stack([np.interp(at, centre, load[:, c]) for _, c, _ in mine], 1))
-        sleeper = np.tile(np.arange(n), len(mine))
-        force = ballast.wheel_forces(r, sleeper, np.concatenate(rows_pos),
-                                     np.concatenate(rows_load))  # fmt: skip
+            at_contact = {c: np.interp(at, centre, load[:, c]) for c in {c for _, c, _ in mine}}
+            rows_load.append(np.stack([at_contact[c] for _, c, _ in mine], 1))
+        # rows sleeper after sleeper (each wheel over it in turn): one window's rows together
+        sleeper = np.repeat(np.arange(n), len(mine))
+        force = ballast.wheel_forces(r, sleeper, np.stack(rows_pos, 1).reshape(sleeper.size, -1),
+                                     np.stack(rows_load, 1).reshape(sleeper.size, -1))  # fmt: skip
         placed.append(([j for j, _, _ in mine], sleeper, force))
     return placed
 
@@ -143,7 +147,7 @@ def passage_loads(placed, ballast, state) -> np.ndarray:
     for r, (mine, sleeper, force) in enumerate(placed):
         index, support, _ = ballast.force_solve(r, state, sleeper, force)
         for k, j in enumerate(mine):
-            rows = slice(k * n, (k + 1) * n)
+            rows = slice(k, None, len(mine))
             out[j] = peak_per_sleeper(index[rows], support[rows], n)
     return out
 
