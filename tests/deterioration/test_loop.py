@@ -123,16 +123,31 @@ def _saw(e):
 def test_a_large_step_limit_is_held_to_the_stable_step(spot_track, fine):
     """With a 5 mm limit the vehicles run only every 5 mm of settlement, but the rail-seat
     loads are updated within each step at each sleeper's stable step (``Q / (s kd)``,
-    about 1 mm here): the result stays within 7 % of 0.25 mm steps (measured 5.6 %: the
-    dynamic loads are older) and its largest sleeper-to-sleeper step within 10 % (measured
-    8 %). Without the stable step, 5 mm steps make settlement alternate from sleeper to
-    sleeper (measured: the largest sleeper-to-sleeper step about 3 times that of fine
-    steps)."""
+    about 1 mm here): the result stays within 8 % of 0.25 mm steps (measured 7.3 %: the
+    dynamic loads are older; 5.6 % when the snapshot at 25 MGT also cut a step) and its
+    largest sleeper-to-sleeper step within 10 % (measured 5 %). Without the stable step,
+    5 mm steps make settlement alternate from sleeper to sleeper (measured: the largest
+    sleeper-to-sleeper step about 3 times that of fine steps)."""
     large = _at_50_mgt(spot_track, 5e-3)
     e_large, e_fine = (r.settlement.isel(mgt=-1).values for r in (large, fine))
-    assert np.max(np.abs(e_large - e_fine) / e_fine) < 0.07
+    assert np.max(np.abs(e_large - e_fine) / e_fine) < 0.08
     assert _saw(e_large) < 1.1 * _saw(e_fine)
     assert large.attrs["steps"] < fine.attrs["steps"]  # the cap is looser than 0.25 mm
+
+
+def test_snapshots_do_not_change_the_prediction(spot_track):
+    """A snapshot within a step is the track at its tonnage from the step's own closed form,
+    so asking for more snapshots changes no step: snapshots every 1 and every 5 MGT give
+    the same steps, the same settlement and the same profile at 5 MGT, to the bit (when a
+    snapshot cut a step, every snapshot asked for moved the prediction)."""
+    every = [predict(spot_track, [LOADED, EMPTY], LAW, options(total_mgt=10.0,
+                                                               snapshot_every_mgt=m))
+             for m in (1.0, 5.0)]  # fmt: skip
+    assert [ds.snapshot_mgt.size for ds in every] == [11, 3]
+    np.testing.assert_array_equal(every[0].step_end, every[1].step_end)
+    np.testing.assert_array_equal(*(ds.settlement.isel(mgt=-1) for ds in every))
+    np.testing.assert_array_equal(*(ds.profile.sel(snapshot=ds.snapshot_mgt == 5.0)
+                                    for ds in every))  # fmt: skip
 
 
 def test_rate_field_is_seeded_lognormal(uniform):
@@ -155,8 +170,10 @@ def test_bad_options(uniform):
         predict(uniform, [Traffic(LOADED.vehicle, 10.0, -1.0)], LAW, options())
     with pytest.raises(TrackdynInputError, match="no contact on the right rail"):
         predict(uniform, [LOADED], LAW, options(run=RunOptions(model="2dof")))
+    spot = synthetic_track(120.0, spectrum=None, stiffness_cov=0.0, seed=1,
+                           features=(SoftSpot(30.0, 6.0, 0.45, 1.5e-3),))  # fmt: skip
     with pytest.raises(TrackdynInputError, match="max_steps = 1"):
-        predict(uniform, [LOADED], LAW, options(max_steps=1))  # two snapshot intervals
+        predict(spot, [LOADED], LAW, options(max_steps=1))  # its shape limits the steps
 
 
 def level(features=()):

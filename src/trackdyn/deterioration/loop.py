@@ -21,8 +21,11 @@ step is the largest one whose change of the track's shape stays within the limit
 every sleeper (found by root finding). The shape is what the vehicle feels: the
 increment less its moving mean over `SHAPE_WAVELENGTH` (a track that settles evenly over
 a wavelength longer than the D1 band's loads the wheels as before; the rail beam still
-redistributes the rail-seat loads within the step). The step is cut to land on the
-snapshot tonnages and on ``total_mgt``; the first, and the first after each tamping, is
+redistributes the rail-seat loads within the step). The step is cut to land on
+``total_mgt`` and on maintenance; a snapshot within a step is the track at its tonnage
+from the same closed form, so the snapshots asked for do not change the prediction (cut
+at each of the life's 30 snapshots, a 1 km section's 300 MGT took 89 steps instead of 73,
+17 % more time). The first step, and the first after each tamping, is
 at least one train (``min_step_passages`` passages of the traffic mix): the law's first
 cycles settle fast, and a step shorter than a train would follow them with vehicle runs
 where the rail-seat load updates do. Within a step, the dynamic wheel loads of
@@ -386,9 +389,7 @@ def predict(track: Track, traffic, law, options=None, *, zones=(), progress=Fals
             timing["beam"] += time.perf_counter() - clock
             step_lins = [current[run.lin.static_load] for run in runs]
             solved = vehicle_runs(runs, step_lins, timing, ballast, state)
-            target = snap_at[np.searchsorted(snap_at, mgt, side="right")]
-            if maint is not None:
-                target = min(target, maint.next_due(mgt))
+            target = total if maint is None else min(total, maint.next_due(mgt))
             start_level, span, moved, updates = level, None, 0.0, 0
             while span is None or span - moved > 1e-12 * span:
                 if updates >= MAX_LOAD_UPDATES:
@@ -412,6 +413,13 @@ def predict(track: Track, traffic, law, options=None, *, zones=(), progress=Fals
                     step_peak = peak
                 stable = stable_settlement(peak, ballast.stiffness, sensitivity)
                 dm = step_size(settle, span - moved, stable)
+                here = mgt + moved
+                for m in snap_at[(snap_at > here) & (snap_at <= here + dm)]:  # snapshots within
+                    clock = time.perf_counter()
+                    inner = level + settle(m - here)
+                    at = ballast.state(inner, state)
+                    _record(history, m, inner, at, ballast.geometry(reference, at))
+                    timing["beam"] += time.perf_counter() - clock
                 level = level + settle(dm)
                 by_vehicle += rate * wear(dm) * acc.advance(dm)
                 if maint is not None:
@@ -429,9 +437,8 @@ def predict(track: Track, traffic, law, options=None, *, zones=(), progress=Fals
             steps["peak_load"].append(step_peak)
             steps["max_settlement"].append(float((level - start_level).max()))
             steps["load_updates"].append(updates)
-            for key, value in (("mgt", mgt), ("settlement", level), ("geometry", geometry),
-                               ("hanging_gap", state.hanging_gap)):  # fmt: skip
-                history[key].append(value)
+            if mgt - history["mgt"][-1] > 1e-12 * total:  # not a snapshot just recorded
+                _record(history, mgt, level, state, geometry)
             if maint is not None and mgt < total:
                 due = maint.due(mgt, d1_sd(geometry, track.extent, o.segment_length)[0])
                 if due.size:
@@ -452,6 +459,13 @@ def predict(track: Track, traffic, law, options=None, *, zones=(), progress=Fals
     record = {"cycles": acc.N, "rate": rate, "by_vehicle": by_vehicle,
               "kind": _kinds(zones, pos), "interventions": maint.done if maint else []}  # fmt: skip
     return make_dataset(track, history, steps, snap_at, record, timing, traffic, law, o)
+
+
+def _record(history, mgt, level, state, geometry) -> None:
+    """Append the track at ``mgt`` [MGT] to the loop's ``history``."""
+    for key, value in (("mgt", mgt), ("settlement", level), ("geometry", geometry),
+                       ("hanging_gap", state.hanging_gap)):  # fmt: skip
+        history[key].append(value)
 
 
 def _cycles(runs, lins, loads, shape):
