@@ -61,8 +61,9 @@ def test_the_loops_time_step_keeps_wheel_loads_within_a_percent(vehicle, toleran
     lin = example_track().linearise(veh.static_wheel_load)
     dt = time_step(build_model("11dof", veh), lin, 60 / 3.6, RUN_STEPS_PER_PERIOD)[0]
     loads = [
-        simulate(veh, lin, RunOptions(model="11dof", speed_kmh=60, dt_s=dt / f,
-                                       store_every=f)).wheel_load.values  # fmt: skip
+        simulate(
+            veh, lin, RunOptions(model="11dof", speed_kmh=60, dt_s=dt / f, store_every=f)
+        ).wheel_load.values  # fmt: skip
         for f in (1, 4)
     ]
     error = np.abs(loads[0] - loads[1]).max() / veh.static_wheel_load

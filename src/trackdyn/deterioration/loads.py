@@ -247,11 +247,15 @@ class TrafficRun:
         self.state = None  # the ballast state of its latest run on the discrete track
         self.step: StepLoads | None = None
         self.placed: tuple | None = None  # (solved run, its `wheel_forces`)
+        self.solved = None  # its latest run
+        self.loads: np.ndarray | None = None  # its latest load cycles (wheels, sleepers)
+        self.held = False  # keep its latest run and load cycles (the loop decides)
 
 
 def vehicle_runs(runs, lins: list[LinearisedTrack], timing: dict, ballast=None,
                  state=None) -> list:  # fmt: skip
-    """Run every vehicle of the traffic once over the track as it stands.
+    """Run every vehicle of the traffic once over the track as it stands; a vehicle
+    ``held`` keeps its latest run.
 
     The vehicles run side by side in one batch (`trackdyn.simulation.run_batch`), each
     over its own linearisation of the track, or on the discrete track of the ballast's
@@ -276,24 +280,26 @@ def vehicle_runs(runs, lins: list[LinearisedTrack], timing: dict, ballast=None,
     list of trackdyn.simulation.Run
         One solved run per vehicle.
     """
-    if not runs:
-        return []
-    clock = time.perf_counter()
-    vehicles = [run.traffic.vehicle for run in runs]
-    tracks = [
-        discrete_track(lin, run.discrete, stiffness=ballast.stiffness, gap=state.gap)
-        if run.run.track == "discrete"
-        else lin
-        for run, lin in zip(runs, lins, strict=True)
-    ]
-    for run in runs:
-        run.state = state
-    solved = run_batch(vehicles, tracks, [run.run for run in runs])
-    timing["vehicle"] += time.perf_counter() - clock
-    for result in solved:
-        if isinstance(result, Exception):
-            raise result
-    return solved
+    fresh = [(run, lin) for run, lin in zip(runs, lins, strict=True)
+             if not run.held or run.solved is None]  # fmt: skip
+    if fresh:
+        clock = time.perf_counter()
+        vehicles = [run.traffic.vehicle for run, _ in fresh]
+        tracks = [
+            discrete_track(lin, run.discrete, stiffness=ballast.stiffness, gap=state.gap)
+            if run.run.track == "discrete"
+            else lin
+            for run, lin in fresh
+        ]
+        for run, _ in fresh:
+            run.state = state
+        solved = run_batch(vehicles, tracks, [run.run for run, _ in fresh])
+        timing["vehicle"] += time.perf_counter() - clock
+        for (run, _), result in zip(fresh, solved, strict=True):
+            if isinstance(result, Exception):
+                raise result
+            run.solved = result
+    return [run.solved for run in runs]
 
 
 def rail_seat_loads(runs, solved, ballast, state, timing: dict) -> list:
@@ -302,7 +308,8 @@ def rail_seat_loads(runs, solved, ballast, state, timing: dict) -> list:
     The wheel loads of each run go onto the rail beam on ``state`` (`passage_loads`; they are
     placed on the beam windows once per run, `wheel_forces`, and solved on each state); a run
     on the discrete track gives them itself, redistributed by the rail beam as the ballast
-    has settled since the run (`StepLoads`). Adds the seconds spent to ``timing["beam"]``.
+    has settled since the run (`StepLoads`); a run ``held`` keeps its latest load cycles.
+    Adds the seconds spent to ``timing["beam"]``.
 
     Parameters
     ----------
@@ -318,15 +325,16 @@ def rail_seat_loads(runs, solved, ballast, state, timing: dict) -> list:
         Seconds spent so far, by part.
     """
     clock = time.perf_counter()
-    loads = []
     for run, done in zip(runs, solved, strict=True):
+        if run.held and run.loads is not None:
+            continue  # its latest load cycles stand
         if run.run.track != "discrete":
             if run.placed is None or run.placed[0] is not done:
                 run.placed = (done, wheel_forces(done, ballast, run.model))
-            loads.append(passage_loads(run.placed[1], ballast, state))
+            run.loads = passage_loads(run.placed[1], ballast, state)
             continue
         if run.step is None or run.step.run is not done:
             run.step = StepLoads(done, run.model, ballast, run.state)
-        loads.append(run.step.at(state))
+        run.loads = run.step.at(state)
     timing["beam"] += time.perf_counter() - clock
-    return loads
+    return [run.loads for run in runs]

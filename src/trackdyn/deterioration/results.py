@@ -102,8 +102,8 @@ def make_dataset(track, history, steps, snap_at, record, timing, traffic, law,
         ``mgt`` [MGT], ``settlement`` [m], ``geometry`` and ``hanging_gap`` [m] after each
         step, initial first.
     steps : dict
-        ``start``, ``end`` [MGT], ``peak_load`` [N], ``max_settlement`` [m] and
-        ``load_updates`` per step.
+        ``start``, ``end`` [MGT], ``peak_load`` [N], ``max_settlement`` [m],
+        ``load_updates`` and ``vehicle_runs`` per step.
     snap_at : ndarray
         Snapshot tonnages, each one of ``history["mgt"]`` [MGT].
     record : dict
@@ -228,6 +228,11 @@ def make_dataset(track, history, steps, snap_at, record, timing, traffic, law,
                 "step",
                 np.array(steps["load_updates"], dtype=int),
                 {"units": "1", "long_name": "rail-seat load updates (beam solves) in the step"},
+            ),
+            "step_vehicle_runs": (
+                "step",
+                np.array(steps["vehicle_runs"], dtype=int),
+                {"units": "1", "long_name": "vehicles run in the step (the others held)"},
             ),
             "peak_rail_seat_load": (
                 ("step", "rail", "sleeper"),

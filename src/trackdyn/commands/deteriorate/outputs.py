@@ -184,6 +184,8 @@ def steps_table(ds) -> pd.DataFrame:
             "start_mgt": ds.step_start.values,
             "end_mgt": ds.step_end.values,
             "max_settlement_mm": ds.step_max_settlement.values * 1e3,
+            "vehicle_runs": ds.step_vehicle_runs.values,
+            "load_updates": ds.step_load_updates.values,
         }
     )
 
