@@ -35,7 +35,8 @@ where the rail-seat load updates do. Within a step, the dynamic wheel loads of
 the run stay and the rail beam redistributes them as the ballast settles: the rail-seat
 loads are updated as often as each sleeper's stable step (`stable_settlement`) needs.
 A law that follows the load steeply, a soft spot or the first train after tamping then
-costs beam solves, not vehicle runs.
+costs beam solves, not vehicle runs. A vehicle that causes next to none of a step's
+settlement (`MIN_SHARE`) keeps its latest run and load cycles into the next step.
 
 The stable step. A sleeper whose ballast sinks ``δ`` more than its neighbours' sheds load
 ``kd δ`` to them (the rail, far stiffer against a sleeper-to-sleeper pattern than the
