@@ -169,7 +169,7 @@ class Windows:
         self._rest: RailRest | None = None  # the rest state the inverses below belong to
         self._flips = np.zeros(n, np.int64)  # rank-one changes since formed in full
         self._closed: np.ndarray | None = None  # its closed supports per window
-        self._inverse = np.empty((0, self.width, self.width))  # sized at the first rest state
+        self._inverse: np.ndarray = np.empty((0, self.width, self.width))  # sized at first use
 
     def load_vector(self, centre, position, load):
         """Condensed nodal forces of point loads, (B, W) [N].
