@@ -77,7 +77,7 @@ def test_check_survey_is_predicted_with_the_field(fitted):
     table = pd.read_csv(out / "calibration.csv")
     check = table[table.role == "check"]
     error = np.sqrt(np.mean((check.d1_sd_predicted_mm - check.d1_sd_mm) ** 2))
-    assert error < 0.05, error  # issue 21's acceptance; 0.027, 0.035, 0.050 mm measured
+    assert error < 0.05, error  # issue 21's acceptance; 0.026, 0.036, 0.049 mm measured
 
 
 def test_estimated_field_follows_the_true_one(fitted):
@@ -109,7 +109,7 @@ def test_global_parameters_move_along_the_ridge(fitted):
     ``K_s q^α (α δ + u)`` (``q`` the mean rail-seat load over Q_ref, ``δ`` the load's
     pattern in ``ln``, ``u`` the field's): a larger K_s with a smaller exponent and the
     field scaled with it predicts the same surveys, so the errors of the two have
-    opposite signs (+19 % and -10 %, -22 % and +33 %, -34 % and +30 %, measured)."""
+    opposite signs (+19 % and -10 %, -23 % and +34 %, -34 % and +30 %, measured)."""
     out, _, true_field = fitted
     errors = _errors(out, true_field)
     assert errors["K_s"] * errors["load_exponent"] < 0, errors
