@@ -247,6 +247,7 @@ class Ballast:
         self.void = void - self.reseat
         self.initial = self.state(np.zeros_like(self.void))
         self._secant0: dict[float, tuple[np.ndarray, np.ndarray]] = {}  # by static load
+        self._secant_loads: dict[float, list[np.ndarray]] = {}  # placed, by static load
 
     @property
     def stiffness(self) -> np.ndarray:
@@ -329,13 +330,18 @@ class Ballast:
         return self.windows[r].solve(state.rails[r], centre, force)
 
     def _secant(self, state: BallastState, static_load: float):
-        """Beam secant stiffness [N/m] and mean deflection [m] under ``Ps (1 ± δ)``."""
+        """Beam secant stiffness [N/m] and mean deflection [m] under ``Ps (1 ± δ)`` (the
+        loads placed on the windows once per static load)."""
         n = self.position.size
         centre = np.tile(np.arange(n), 2)
-        load = static_load * np.repeat([1 - self.delta, 1 + self.delta], n)[:, None]
+        if static_load not in self._secant_loads:
+            load = static_load * np.repeat([1 - self.delta, 1 + self.delta], n)[:, None]
+            at = self.position[centre][:, None]
+            self._secant_loads[static_load] = [self.wheel_forces(r, centre, at, load)
+                                               for r in range(len(RAILS))]  # fmt: skip
         k, ys = [], []
-        for r in range(len(RAILS)):
-            _, _, y = self.wheel_solve(r, state, centre, self.position[centre][:, None], load)
+        for r, force in enumerate(self._secant_loads[static_load]):
+            _, _, y = self.force_solve(r, state, centre, force)
             dy = y[:, self.beams[r].half] - np.tile(state.rails[r].deflection, 2)
             k.append(2 * self.delta * static_load / (dy[n:] - dy[:n]))
             ys.append(0.5 * (dy[n:] + dy[:n]))
