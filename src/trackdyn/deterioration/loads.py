@@ -251,6 +251,11 @@ class TrafficRun:
         self.loads: np.ndarray | None = None  # its latest load cycles (wheels, sleepers)
         self.held = False  # keep its latest run and load cycles (the loop decides)
 
+    @property
+    def keeps(self) -> bool:
+        """Held, with a latest run to keep (its run and load cycles stand this step)."""
+        return self.held and self.solved is not None
+
 
 def vehicle_runs(runs, lins: list[LinearisedTrack], timing: dict, ballast=None,
                  state=None) -> list:  # fmt: skip
@@ -280,8 +285,7 @@ def vehicle_runs(runs, lins: list[LinearisedTrack], timing: dict, ballast=None,
     list of trackdyn.simulation.Run
         One solved run per vehicle.
     """
-    fresh = [(run, lin) for run, lin in zip(runs, lins, strict=True)
-             if not run.held or run.solved is None]  # fmt: skip
+    fresh = [(run, lin) for run, lin in zip(runs, lins, strict=True) if not run.keeps]
     if fresh:
         clock = time.perf_counter()
         vehicles = [run.traffic.vehicle for run, _ in fresh]
@@ -326,7 +330,7 @@ def rail_seat_loads(runs, solved, ballast, state, timing: dict) -> list:
     """
     clock = time.perf_counter()
     for run, done in zip(runs, solved, strict=True):
-        if run.held and run.loads is not None:
+        if run.keeps:
             continue  # its latest load cycles stand
         if run.run.track != "discrete":
             if run.placed is None or run.placed[0] is not done:

@@ -249,9 +249,9 @@ MIN_SHARE = 0.01
 """A vehicle whose part of a step's settlement at every rail seat is below this share of the
 step's largest settlement is not run again in the next step (unless a tamping came
 between), nor its rail-seat loads solved again: its latest load cycles stand (the
-example's empty wagons cause 0.07 % of its settlement). Held load cycles 10 % off move a
-rail seat's settlement by at most a third of that part (the law's load exponent of 3:
-1.1³ = 1.33), 0.33 % of the step's largest settlement, within the step limit's
+example's empty wagons cause 0.07 % of its settlement). Held load cycles 10 % off move
+that part by about ``α`` times 10 % (``α`` the law's load exponent, 2 in the shipped power
+law: 1.1² = 1.21), 0.21 % of the step's largest settlement, within the step limit's
 accuracy."""
 
 RUNAWAY_STEPS = 10
@@ -405,7 +405,7 @@ def predict(track: Track, traffic, law, options=None, *, zones=(), progress=Fals
             current = {p: ballast.linearised(lin, state, geometry) for p, lin in lins.items()}
             timing["beam"] += time.perf_counter() - clock
             step_lins = [current[run.lin.static_load] for run in runs]
-            ran = sum(not run.held or run.solved is None for run in runs)
+            ran = sum(not run.keeps for run in runs)
             solved = vehicle_runs(runs, step_lins, timing, ballast, state)
             target = ends[np.searchsorted(ends, mgt, side="right")]
             if maint is not None:
