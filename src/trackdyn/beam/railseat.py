@@ -12,7 +12,8 @@ length of 0.8 m, ``e^(-x/L_c)``). The rail rotations of the window are condensed
 per window, so that each wheel position is a dense system of ``2 half + 1`` unknowns (the
 deflections at the sleepers); all positions are solved in one compiled loop, and the set
 of closed supports of each is iterated to convergence (closed where the rail reaches the
-ballast, open elsewhere), starting from the rest state's. The section is extended beyond
+ballast, open elsewhere), starting from the set the same row had in its latest solve
+(the ballast changes little between solves). The section is extended beyond
 its ends by copies of its end sleepers, as the track goes on beyond a section.
 
 References
@@ -138,6 +139,29 @@ def rest_state(beam: RailBeam, gap, closed=None) -> RailRest:
     )
 
 
+@dataclass(frozen=True)
+class WindowLoads:
+    """Wheel loads placed on the beam windows, one row per wheel position
+    (`Windows.load_vector`); they do not depend on the ballast state, so that they are placed
+    once and solved on every rest state (`Windows.solve`).
+
+    Parameters
+    ----------
+    centre : ndarray, shape (B,)
+        Window (sleeper index) of each row.
+    force : ndarray, shape (B, W)
+        Condensed nodal forces of the loads [N].
+    closed : ndarray of bool, shape (B, W)
+        Each row's closed supports in its latest solve (all closed before the first),
+        where the next solve starts: the ballast changes little between solves, so that
+        the set is mostly right at once.
+    """
+
+    centre: np.ndarray
+    force: np.ndarray
+    closed: np.ndarray
+
+
 class Windows:
     """Condensed beam stiffness of the window around every sleeper of a `RailBeam`.
 
@@ -171,8 +195,8 @@ class Windows:
         self._closed: np.ndarray | None = None  # its closed supports per window
         self._inverse: np.ndarray = np.empty((0, self.width, self.width))  # sized at first use
 
-    def load_vector(self, centre, position, load):
-        """Condensed nodal forces of point loads, (B, W) [N].
+    def load_vector(self, centre, position, load, closed=None) -> WindowLoads:
+        """Point loads placed on the windows: their condensed nodal forces.
 
         Parameters
         ----------
@@ -180,8 +204,14 @@ class Windows:
             Window (sleeper index) of each row.
         position, load : ndarray, shape (B, L)
             Load positions [m] and loads [N]; loads outside the window are dropped.
+        closed : ndarray of bool, shape (B, W), optional
+            Where the first solve starts (`WindowLoads.closed`): the closed supports of
+            similar loads on the same rows (all closed when not given).
         """
-        return _condensed_loads(self.x, self.T, centre, position, load)
+        centre = np.asarray(centre)
+        force = _condensed_loads(self.x, self.T, centre, position, load)
+        start = np.ones(force.shape, np.bool_) if closed is None else np.array(closed)
+        return WindowLoads(centre, force, start)
 
     def _padded_values(self, rest: RailRest):
         """Stiffness, gap and rest deflection per sleeper, padded (`RailBeam.padded`)."""
@@ -213,22 +243,21 @@ class Windows:
             self._rest, self._closed = rest, closed
         return self._inverse
 
-    def solve(self, rest: RailRest, centre, force):
-        """Support forces [N] of each row with the loads ``force`` added to the rest state.
+    def solve(self, rest: RailRest, loads: WindowLoads):
+        """Support forces [N] of each row with its loads added to the rest state.
 
         The inverse of each window's matrix with the supports closed at rest is formed once
         per rest state; a row whose set of closed supports differs from the rest state's
         in ``m`` supports is solved from it by the Woodbury identity (an ``m x m`` system),
-        and the sets are iterated to convergence.
+        and the sets are iterated to convergence, starting from the row's set in its
+        latest solve (``loads.closed``, updated).
 
         Parameters
         ----------
         rest : RailRest
             The rail at rest.
-        centre : ndarray, shape (B,)
-            Window (sleeper index) of each row.
-        force : ndarray, shape (B, W)
-            Condensed nodal forces of the wheel loads (`load_vector`) [N].
+        loads : WindowLoads
+            The wheel loads placed on the windows (`load_vector`).
 
         Returns
         -------
@@ -242,13 +271,14 @@ class Windows:
         """
         inverse = self._inverses(rest)
         k, g, u0 = self._padded_values(rest)
-        support, y, unsettled = _window_solve(inverse, centre, k, g, u0, force, MAX_SWEEPS)
+        support, y, unsettled = _window_solve(inverse, loads.centre, k, g, u0, loads.force,
+                                              loads.closed, MAX_SWEEPS)  # fmt: skip
         if unsettled:
             raise TrackdynInputError(
                 f"rail-seat forces: the contact of {unsettled} wheel positions did not settle "
                 f"in {MAX_SWEEPS} iterations"
             )
-        return self.index[centre] - (self.beam.half + 1), support, y
+        return self.index[loads.centre] - (self.beam.half + 1), support, y
 
 
 @njit(cache=True, nogil=True)
@@ -352,8 +382,10 @@ def _gauss_solve(c, z, m):
 
 
 @njit(cache=True, nogil=True)
-def _window_solve(inverse, centre, k, g, u0, force, max_sweeps):
-    """Support force and rail deflection of each row's window, its supports iterated.
+def _window_solve(inverse, centre, k, g, u0, force, start, max_sweeps):
+    """Support force and rail deflection of each row's window, its supports iterated from
+    ``start`` (B, W), each row's starting set of closed supports, overwritten with its
+    solution's.
 
     Row ``b`` solves ``(A + diag(k closed)) v = force[b] - k closed (u0 - g)`` on window
     ``centre[b]`` (padded sleepers ``centre[b] + 1`` onwards of ``k``, ``g``, ``u0``) from
@@ -386,26 +418,14 @@ def _window_solve(inverse, centre, k, g, u0, force, max_sweeps):
         for j in range(W):
             kb[j], gb[j], ub[j] = k[first + j], g[first + j], u0[first + j]
             closed0[j] = ub[j] > gb[j]
-            closed[j] = closed0[j]
+            closed[j] = start[b, j]
         for i in range(W):
             base[i] = 0.0
         for j in range(W):  # A^-1 is symmetric: its rows as columns, no serial sum
             f = force[b, j]
             for i in range(W):
                 base[i] += inv[j, i] * f
-        for i in range(W):
-            v[i] = base[i]
-        for sweep in range(max_sweeps + 1):
-            changed = 0  # counted, not branched on
-            for j in range(W):
-                now = ub[j] + v[j] > gb[j]
-                changed += now != closed[j]
-                closed[j] = now
-            if changed == 0:
-                break
-            if sweep == max_sweeps:
-                unsettled += 1
-                break
+        for sweep in range(max_sweeps):
             m = 0
             for j in range(W):
                 if closed[j] != closed0[j]:
@@ -428,7 +448,17 @@ def _window_solve(inverse, centre, k, g, u0, force, max_sweeps):
             for a in range(m):
                 for i in range(W):
                     v[i] -= inv[idx[a], i] * z[a]
+            changed = 0  # counted, not branched on
+            for j in range(W):
+                now = ub[j] + v[j] > gb[j]
+                changed += now != closed[j]
+                closed[j] = now
+            if changed == 0:
+                break
+            if sweep == max_sweeps - 1:
+                unsettled += 1
         for j in range(W):
+            start[b, j] = closed[j]
             y = ub[j] + v[j]
             deflection[b, j] = y
             support[b, j] = kb[j] * max(y - gb[j], 0.0)

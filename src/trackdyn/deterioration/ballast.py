@@ -48,7 +48,7 @@ import dataclasses
 import numpy as np
 import pandas as pd
 
-from trackdyn.beam.railseat import RailBeam, RailRest, Windows, rest_state
+from trackdyn.beam.railseat import RailBeam, RailRest, WindowLoads, Windows, rest_state
 from trackdyn.errors import TrackdynInputError, shown
 from trackdyn.io import read_table
 from trackdyn.track.discrete import void_gap
@@ -247,7 +247,7 @@ class Ballast:
         self.void = void - self.reseat
         self.initial = self.state(np.zeros_like(self.void))
         self._secant0: dict[float, tuple[np.ndarray, np.ndarray]] = {}  # by static load
-        self._secant_loads: dict[float, list[np.ndarray]] = {}  # placed, by static load
+        self._secant_loads: dict[float, list[WindowLoads]] = {}  # placed, by static load
 
     @property
     def stiffness(self) -> np.ndarray:
@@ -316,18 +316,18 @@ class Ballast:
             Sleeper of each column (``-1`` .. ``n``: beyond the section), total support force
             [N] and rail deflection [m]; see `Windows.solve`.
         """
-        return self.force_solve(r, state, centre, self.wheel_forces(r, centre, position, load))
+        return self.force_solve(r, state, self.wheel_forces(r, centre, position, load))
 
-    def wheel_forces(self, r: int, centre, position, load) -> np.ndarray:
-        """Condensed nodal forces of wheel loads on rail ``r``'s windows, (B, W) [N]
-        (`Windows.load_vector`; arguments as `wheel_solve`). They do not depend on the
-        ballast state: the loads of a run can be placed once and solved on every state
+    def wheel_forces(self, r: int, centre, position, load, closed=None) -> WindowLoads:
+        """Wheel loads placed on rail ``r``'s windows (`Windows.load_vector`; arguments as
+        `wheel_solve`, ``closed`` where the first solve starts). They do not depend on the
+        ballast state: the loads of a run are placed once and solved on every state
         (`force_solve`)."""
-        return self.windows[r].load_vector(centre, position, load)
+        return self.windows[r].load_vector(centre, position, load, closed)
 
-    def force_solve(self, r: int, state: BallastState, centre, force):
+    def force_solve(self, r: int, state: BallastState, loads: WindowLoads):
         """`wheel_solve` for wheel loads already placed on the windows (`wheel_forces`)."""
-        return self.windows[r].solve(state.rails[r], centre, force)
+        return self.windows[r].solve(state.rails[r], loads)
 
     def _secant(self, state: BallastState, static_load: float):
         """Beam secant stiffness [N/m] and mean deflection [m] under ``Ps (1 ± δ)`` (the
@@ -340,8 +340,8 @@ class Ballast:
             self._secant_loads[static_load] = [self.wheel_forces(r, centre, at, load)
                                                for r in range(len(RAILS))]  # fmt: skip
         k, ys = [], []
-        for r, force in enumerate(self._secant_loads[static_load]):
-            _, _, y = self.force_solve(r, state, centre, force)
+        for r, loads in enumerate(self._secant_loads[static_load]):
+            _, _, y = self.force_solve(r, state, loads)
             dy = y[:, self.beams[r].half] - np.tile(state.rails[r].deflection, 2)
             k.append(2 * self.delta * static_load / (dy[n:] - dy[:n]))
             ys.append(0.5 * (dy[n:] + dy[:n]))

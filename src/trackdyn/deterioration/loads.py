@@ -80,7 +80,7 @@ def cycles_per_passage(model) -> np.ndarray:
     return np.array([model.axles_per_rail / per_rail[r] for _, _, r in wheels(model)])
 
 
-def wheel_forces(run, ballast, model) -> list:
+def wheel_forces(run, ballast, model, previous=None) -> list:
     """The wheel loads of one passage placed on each rail's beam windows, for
     `passage_loads`: for each wheel over each sleeper, every wheel of the vehicle on that
     rail with the load its contact had at that moment of the run.
@@ -93,15 +93,17 @@ def wheel_forces(run, ballast, model) -> list:
         The section's rails and ballast.
     model : trackdyn.vehicle.assembly.Model
         The model of the run (its contacts' axles).
+    previous : list of tuple, optional
+        The same vehicle's loads of an earlier run, placed: the first solve starts from
+        their latest closed supports (`trackdyn.beam.railseat.WindowLoads`).
 
     Returns
     -------
     list of tuple
-        Per rail: the indices in `wheels` of its wheels, the sleeper under the wheel of
-        each row (sleeper after sleeper, each of those wheels over it in turn: a beam
-        window's rows follow each other, so its inverse is read once) and the rows'
-        condensed nodal forces (`Ballast.wheel_forces`) [N]. They do not change as the
-        ballast settles.
+        Per rail: the indices in `wheels` of its wheels and the rows placed on the beam
+        windows (`Ballast.wheel_forces`), one row per wheel over each sleeper (sleeper after
+        sleeper, each of those wheels over it in turn: a beam window's rows follow each
+        other, so its inverse is read once). They do not change as the ballast settles.
     """
     pos = ballast.position
     n = pos.size
@@ -119,9 +121,12 @@ def wheel_forces(run, ballast, model) -> list:
             rows_load.append(np.stack([at_contact[c] for _, c, _ in mine], 1))
         # rows sleeper after sleeper (each wheel over it in turn): one window's rows together
         sleeper = np.repeat(np.arange(n), len(mine))
-        force = ballast.wheel_forces(r, sleeper, np.stack(rows_pos, 1).reshape(sleeper.size, -1),
-                                     np.stack(rows_load, 1).reshape(sleeper.size, -1))  # fmt: skip
-        placed.append(([j for j, _, _ in mine], sleeper, force))
+        closed = None if previous is None else previous[r][1].closed
+        at = np.stack(rows_pos, 1).reshape(sleeper.size, -1)
+        rows = ballast.wheel_forces(
+            r, sleeper, at, np.stack(rows_load, 1).reshape(at.shape), closed
+        )
+        placed.append(([j for j, _, _ in mine], rows))
     return placed
 
 
@@ -143,12 +148,12 @@ def passage_loads(placed, ballast, state) -> np.ndarray:
         Shape (wheels, sleepers) [N], wheels in the order of `wheels`.
     """
     n = ballast.position.size
-    out = np.zeros((sum(len(mine) for mine, _, _ in placed), n))
-    for r, (mine, sleeper, force) in enumerate(placed):
-        index, support, _ = ballast.force_solve(r, state, sleeper, force)
+    out = np.zeros((sum(len(mine) for mine, _ in placed), n))
+    for r, (mine, rows) in enumerate(placed):
+        index, support, _ = ballast.force_solve(r, state, rows)
         for k, j in enumerate(mine):
-            rows = slice(k, None, len(mine))
-            out[j] = peak_per_sleeper(index[rows], support[rows], n)
+            wheel = slice(k, None, len(mine))
+            out[j] = peak_per_sleeper(index[wheel], support[wheel], n)
     return out
 
 
@@ -334,7 +339,8 @@ def rail_seat_loads(runs, solved, ballast, state, timing: dict) -> list:
             continue  # its latest load cycles stand
         if run.run.track != "discrete":
             if run.placed is None or run.placed[0] is not done:
-                run.placed = (done, wheel_forces(done, ballast, run.model))
+                previous = None if run.placed is None else run.placed[1]
+                run.placed = (done, wheel_forces(done, ballast, run.model, previous))
             run.loads = passage_loads(run.placed[1], ballast, state)
             continue
         if run.step is None or run.step.run is not done:
