@@ -67,12 +67,12 @@ def longitudinal_level(
 ) -> np.ndarray:
     """Longitudinal level: the vertical profile band-passed to one EN 13848 waveband.
 
-    Zero-phase Butterworth band-pass (``scipy.signal.sosfiltfilt``) between spatial
-    frequencies ``1/max`` and ``1/min`` cycles/m. Non-uniform input is resampled linearly at
-    the median spacing, filtered and interpolated back. Both ends are padded by holding the
-    end value over one longest wavelength (of the padding types in ``sosfiltfilt`` this gave
-    the smallest end transients on synthetic profiles); within about one longest wavelength
-    of either end the result is still less reliable.
+    Zero-phase Butterworth band-pass (forward and backward, as ``scipy.signal.sosfiltfilt``)
+    between spatial frequencies ``1/max`` and ``1/min`` cycles/m. Non-uniform input is
+    resampled linearly at the median spacing, filtered and interpolated back. Both ends are
+    padded by holding the end value over one longest wavelength (of the padding types in
+    ``sosfiltfilt`` this gave the smallest end transients on synthetic profiles); within
+    about one longest wavelength of either end the result is still less reliable.
 
     Parameters
     ----------
@@ -110,9 +110,9 @@ def longitudinal_level(
             f"{at}distance spacing {dx:g} m is too coarse for band {label}: "
             f"need < {lam_min / 2:g} m"
         )
-    sos = _bandpass(int(order), lam_min, lam_max, dx)
+    sos, zi = _bandpass(int(order), lam_min, lam_max, dx)
     padlen = min(zu.size - 1, int(np.ceil(lam_max / dx)))
-    out = signal.sosfiltfilt(sos, zu, padtype="constant", padlen=padlen)
+    out = _forward_backward(sos, zi, zu, padlen)
     return out if uniform else np.interp(x, xu, out)
 
 
@@ -164,9 +164,22 @@ def segment_sd(distance, level, segment_length: float = 200.0) -> pd.DataFrame:
 
 
 @lru_cache(maxsize=64)
-def _bandpass(order: int, lam_min: float, lam_max: float, dx: float) -> np.ndarray:
-    """Second-order sections of the Butterworth band-pass of `longitudinal_level`, designed
-    once per band and spacing (the deterioration loop filters every step's profiles);
-    shared, so not to be changed by a caller."""
-    return signal.butter(order, [1.0 / lam_max, 1.0 / lam_min], btype="bandpass", fs=1.0 / dx,
-                         output="sos")  # fmt: skip
+def _bandpass(order: int, lam_min: float, lam_max: float, dx: float):
+    """Second-order sections of the Butterworth band-pass of `longitudinal_level` and their
+    steady-state response to a unit step (``scipy.signal.sosfilt_zi``), designed once per
+    band and spacing (the deterioration loop filters every step's profiles); shared, so not
+    to be changed by a caller."""
+    sos = signal.butter(order, [1.0 / lam_max, 1.0 / lam_min], btype="bandpass", fs=1.0 / dx,
+                        output="sos")  # fmt: skip
+    return sos, signal.sosfilt_zi(sos)
+
+
+def _forward_backward(sos, zi, z, padlen: int) -> np.ndarray:
+    """``z`` filtered forward and then backward (zero phase), each end padded with
+    ``padlen`` copies of its end value and each pass started in the steady state of its
+    first input value, as ``scipy.signal.sosfiltfilt(sos, z, padtype="constant",
+    padlen=padlen)`` does, with the steady state ``zi`` given rather than found again."""
+    ext = np.concatenate([np.full(padlen, z[0]), z, np.full(padlen, z[-1])])
+    forward = signal.sosfilt(sos, ext, zi=zi * ext[0])[0]
+    backward = signal.sosfilt(sos, forward[::-1], zi=zi * forward[-1])[0][::-1]
+    return backward[padlen : backward.size - padlen]
