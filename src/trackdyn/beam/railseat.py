@@ -26,6 +26,7 @@ of Sound and Vibration 412, 441-456.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numba import njit
@@ -67,6 +68,12 @@ class RailBeam:
         """``values`` per sleeper extended by ``half + 1`` copies of the end values."""
         p = self.half + 1
         return np.pad(np.asarray(values, dtype=float), (p, p), mode="edge")
+
+    @cached_property
+    def band(self):
+        """The rail's stiffness over its sleepers in LAPACK upper banded form
+        (`trackdyn.beam.elements.stiffness_band`), formed once: every rest state needs it."""
+        return stiffness_band(self.position, self.EI)
 
     @property
     def padded_position(self):
@@ -118,7 +125,7 @@ def rest_state(beam: RailBeam, gap, closed=None) -> RailRest:
     """
     gap = np.asarray(gap, dtype=float)
     n, k = gap.size, beam.stiffness
-    band, w = stiffness_band(beam.position, beam.EI), 2 * np.arange(n)
+    band, w = beam.band, 2 * np.arange(n)
     closed = np.ones(n, bool) if closed is None else np.array(closed, dtype=bool)
     y = np.zeros(n)
     for _ in range(MAX_SWEEPS):
@@ -178,17 +185,23 @@ class Windows:
         # window of sleeper i: padded nodes i .. i + 2h + 2; the two outer nodes are held
         nodes = np.arange(n)[:, None] + np.arange(2 * h + 3)[None, :]
         self.x = xp[nodes]  # (n, W + 2) node positions [m]
-        ke = element_stiffness(np.diff(self.x, axis=1), beam.EI)  # (n, W + 1, 4, 4)
+        # windows of the same element lengths to 1e-12 m (evenly spaced sleepers, up to the
+        # round-off of their positions) are condensed once
+        lengths = np.diff(self.x, axis=1)
+        _, first, same = np.unique(np.round(lengths, 12), axis=0, return_index=True,
+                                   return_inverse=True)  # fmt: skip
+        ke = element_stiffness(lengths[first], beam.EI)  # (windows, W + 1, 4, 4)
         ndof = 2 * (self.width + 2)
-        K = np.zeros((n, ndof, ndof))
+        K = np.zeros((lengths.shape[0], ndof, ndof))
         for e in range(ke.shape[1]):
             K[:, 2 * e : 2 * e + 4, 2 * e : 2 * e + 4] += ke[:, e]
         inner = np.arange(2, ndof - 2)
         K = K[:, inner][:, :, inner]
         w, t = np.arange(0, 2 * self.width, 2), np.arange(1, 2 * self.width, 2)
         Ktt = K[:, t][:, :, t]
-        self.T = np.linalg.solve(Ktt, K[:, t][:, :, w])  # Ktt^-1 Ktw, (n, W, W)
-        self.S = K[:, w][:, :, w] - K[:, w][:, :, t] @ self.T  # condensed stiffness
+        T = np.linalg.solve(Ktt, K[:, t][:, :, w])  # Ktt^-1 Ktw
+        S = K[:, w][:, :, w] - K[:, w][:, :, t] @ T  # condensed stiffness
+        self.T, self.S = T[same.ravel()], S[same.ravel()]  # (n, W, W) each
         self.index = np.arange(n)[:, None] + np.arange(self.width)[None, :] + 1  # padded
         self._rest: RailRest | None = None  # the rest state the inverses below belong to
         self._flips = np.zeros(n, np.int64)  # rank-one changes since formed in full
@@ -357,28 +370,32 @@ def _flip_supports(inverse, before, after, k, flips, max_flips):
 
 
 @njit(cache=True, nogil=True)
-def _gauss_solve(c, z, m):
-    """Solve ``c[:m, :m] y = z[:m]`` in place (``z`` becomes ``y``): Gaussian elimination
-    with partial pivoting, no allocation."""
-    for col in range(m):
-        pivot = col
-        for r in range(col + 1, m):
-            if abs(c[r, col]) > abs(c[pivot, col]):
-                pivot = r
-        if pivot != col:
-            for q in range(m):
-                c[col, q], c[pivot, q] = c[pivot, q], c[col, q]
-            z[col], z[pivot] = z[pivot], z[col]
-        for r in range(col + 1, m):
-            f = c[r, col] / c[col, col]
-            for q in range(col, m):
-                c[r, q] -= f * c[col, q]
-            z[r] -= f * z[col]
-    for r in range(m - 1, -1, -1):
-        acc = z[r]
-        for q in range(r + 1, m):
-            acc -= c[r, q] * z[q]
-        z[r] = acc / c[r, r]
+def _ldl_solve(c, z, m):
+    """Solve ``c[:m, :m] y = z[:m]`` in place (``z`` becomes ``y``) for a symmetric
+    quasi-definite ``c`` (a positive definite and a negative definite diagonal block, in
+    any order), of which the lower triangle is read: ``L D Lᵀ`` without pivoting, which
+    such a matrix has in every order of its rows (Vanderbei 1995); no allocation.
+
+    References
+    ----------
+    Vanderbei, R.J. (1995). Symmetric quasidefinite matrices. SIAM Journal on
+    Optimization 5(1), 100-113.
+    """
+    for j in range(m):  # c's lower triangle becomes L (unit diagonal) and D (diagonal)
+        for p in range(j):
+            f = c[j, p] * c[p, p]
+            for i in range(j, m):
+                c[i, j] -= c[i, p] * f
+        for i in range(j + 1, m):
+            c[i, j] /= c[j, j]
+    for i in range(m):
+        for p in range(i):
+            z[i] -= c[i, p] * z[p]
+    for i in range(m):
+        z[i] /= c[i, i]
+    for i in range(m - 1, -1, -1):
+        for p in range(i + 1, m):
+            z[i] -= c[p, i] * z[p]
 
 
 @njit(cache=True, nogil=True)
@@ -391,11 +408,15 @@ def _window_solve(inverse, centre, k, g, u0, force, start, max_sweeps):
     ``centre[b]`` (padded sleepers ``centre[b] + 1`` onwards of ``k``, ``g``, ``u0``) from
     ``base = A^-1 force[b]``, ``A^-1 = inverse[centre[b]]`` (symmetric) being the inverse
     with the rest state's closed supports ``closed0 = u0 > g`` (at rest their forces
-    balance ``k closed0 (u0 - g)``). A row whose supports ``u0 + v > g`` differ from
-    ``closed0`` in ``m`` of them is solved by the Woodbury identity, ``U`` the unit
-    columns of those supports and ``D`` their change of stiffness (``±k``):
-    ``x0 = base - A^-1 U D U^T (u0 - g)``, ``(I + D U^T A^-1 U) z = D U^T x0``,
-    ``v = x0 - A^-1 U z``; and again with the new set until it no longer changes.
+    balance ``k closed0 (u0 - g)``). A set of closed supports (first ``start[b]``, then
+    ``u0 + v > g``) that differs from ``closed0`` in ``m`` supports is solved by the
+    Woodbury identity, ``U`` the unit columns of those supports and ``D`` their change of
+    stiffness (``±k``): ``e = D U^T (u0 - g)``, ``x0 = base - A^-1 U e`` (needed at those
+    supports only), ``(D^-1 + U^T A^-1 U) z = U^T x0``, ``v = base - A^-1 U (e + z)``;
+    and again with the new set until it no longer changes. ``D^-1 + U^T A^-1 U`` is
+    quasi-definite (`_ldl_solve`): its block of closed supports is positive definite, and
+    that of opened ones negative definite, as the window with them opened is positive
+    definite (its ends are held).
 
     Returns
     -------
@@ -411,7 +432,7 @@ def _window_solve(inverse, centre, k, g, u0, force, start, max_sweeps):
     closed0, closed = np.empty(W, np.bool_), np.empty(W, np.bool_)
     idx = np.empty(W, np.int64)
     kb, gb, ub, base = np.empty(W), np.empty(W), np.empty(W), np.empty(W)
-    v, d, z, c = np.empty(W), np.empty(W), np.empty(W), np.empty((W, W))
+    v, d, e, z, c = np.empty(W), np.empty(W), np.empty(W), np.empty(W), np.empty((W, W))
     unsettled = 0
     for b in range(B):
         inv, first = inverse[centre[b]], centre[b] + 1
@@ -431,23 +452,24 @@ def _window_solve(inverse, centre, k, g, u0, force, start, max_sweeps):
                 if closed[j] != closed0[j]:
                     idx[m] = j
                     m += 1
-            for i in range(W):
-                v[i] = base[i]
             for a in range(m):
                 j = idx[a]
                 d[a] = kb[j] if closed[j] else -kb[j]
-                e = d[a] * (ub[j] - gb[j])
-                for i in range(W):
-                    v[i] -= inv[j, i] * e
-            for a in range(m):
+                e[a] = d[a] * (ub[j] - gb[j])
+            for a in range(m):  # x0 at the changed supports only; D^-1 + U^T A^-1 U
+                x0 = base[idx[a]]
                 for q in range(m):
-                    c[a, q] = d[a] * inv[idx[a], idx[q]]
-                c[a, a] += 1.0
-                z[a] = d[a] * v[idx[a]]
-            _gauss_solve(c, z, m)
-            for a in range(m):
+                    x0 -= inv[idx[q], idx[a]] * e[q]
+                    c[a, q] = inv[idx[a], idx[q]]
+                c[a, a] += 1.0 / d[a]
+                z[a] = x0
+            _ldl_solve(c, z, m)
+            for i in range(W):
+                v[i] = base[i]
+            for a in range(m):  # v = x0 - A^-1 U z = base - A^-1 U (e + z), one pass
+                w = e[a] + z[a]
                 for i in range(W):
-                    v[i] -= inv[idx[a], i] * z[a]
+                    v[i] -= inv[idx[a], i] * w
             changed = 0  # counted, not branched on
             for j in range(W):
                 now = ub[j] + v[j] > gb[j]
