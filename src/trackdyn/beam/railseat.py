@@ -156,6 +156,9 @@ class WindowLoads:
     ----------
     centre : ndarray, shape (B,)
         Window (sleeper index) of each row.
+    index : ndarray, shape (B, W)
+        Sleeper of each column (``-1`` .. ``n``: beyond the section, the copies of the end
+        sleepers).
     force : ndarray, shape (B, W)
         Condensed nodal forces of the loads [N].
     closed : ndarray of bool, shape (B, W)
@@ -165,6 +168,7 @@ class WindowLoads:
     """
 
     centre: np.ndarray
+    index: np.ndarray
     force: np.ndarray
     closed: np.ndarray
 
@@ -199,14 +203,15 @@ class Windows:
         K = K[:, inner][:, :, inner]
         w, t = np.arange(0, 2 * self.width, 2), np.arange(1, 2 * self.width, 2)
         Ktt = K[:, t][:, :, t]
-        T = np.linalg.solve(Ktt, K[:, t][:, :, w])  # Ktt^-1 Ktw
-        S = K[:, w][:, :, w] - K[:, w][:, :, t] @ T  # condensed stiffness
-        self.T, self.S = T[same.ravel()], S[same.ravel()]  # (n, W, W) each
+        self.T = np.linalg.solve(Ktt, K[:, t][:, :, w])  # Ktt^-1 Ktw, (windows, W, W)
+        self.S = K[:, w][:, :, w] - K[:, w][:, :, t] @ self.T  # condensed stiffness
+        self.kind = same.ravel()  # the condensed window of each sleeper's window, (n,)
         self.index = np.arange(n)[:, None] + np.arange(self.width)[None, :] + 1  # padded
         self._rest: RailRest | None = None  # the rest state the inverses below belong to
         self._flips = np.zeros(n, np.int64)  # rank-one changes since formed in full
         self._closed: np.ndarray | None = None  # its closed supports per window
         self._inverse: np.ndarray = np.empty((0, self.width, self.width))  # sized at first use
+        self._padded: tuple = ()  # the rest state's values per sleeper, padded
 
     def load_vector(self, centre, position, load, closed=None) -> WindowLoads:
         """Point loads placed on the windows: their condensed nodal forces.
@@ -222,14 +227,9 @@ class Windows:
             similar loads on the same rows (all closed when not given).
         """
         centre = np.asarray(centre)
-        force = _condensed_loads(self.x, self.T, centre, position, load)
+        force = _condensed_loads(self.x, self.T, self.kind, centre, position, load)
         start = np.ones(force.shape, np.bool_) if closed is None else np.array(closed)
-        return WindowLoads(centre, force, start)
-
-    def _padded_values(self, rest: RailRest):
-        """Stiffness, gap and rest deflection per sleeper, padded (`RailBeam.padded`)."""
-        b = self.beam
-        return tuple(b.padded(v) for v in (b.stiffness, rest.gap, rest.deflection))
+        return WindowLoads(centre, self.index[centre] - (self.beam.half + 1), force, start)
 
     def _inverses(self, rest: RailRest) -> np.ndarray:
         """Inverse window matrices with the rest state's closed supports, (n, W, W) [m/N].
@@ -237,20 +237,23 @@ class Windows:
         Formed in full at the first rest state; after that, each support that opened or
         closed since the last rest state is a rank-one change of the windows that hold it
         (`_flip_supports`, Sherman-Morrison), and a window is formed in full again after
-        `MAX_FLIPS` of them (round-off).
+        `MAX_FLIPS` of them (round-off). Keeps the rest state's stiffness, gap and rest
+        deflection per sleeper, padded (`RailBeam.padded`), for `solve`.
         """
         if self._rest is not rest:
-            k, g, u0 = (v[self.index] for v in self._padded_values(rest))
+            b = self.beam
+            self._padded = tuple(b.padded(v) for v in (b.stiffness, rest.gap, rest.deflection))
+            k, g, u0 = (v[self.index] for v in self._padded)
             closed = u0 > g
             if self._rest is None:
-                A = self.S.copy()
+                A = self.S[self.kind]
                 A[:, np.arange(self.width), np.arange(self.width)] += k * closed
                 self._inverse = np.linalg.inv(A)
             else:
                 redo = _flip_supports(self._inverse, self._closed, closed, k, self._flips,
                                       MAX_FLIPS)  # fmt: skip
                 if redo.size:
-                    A = self.S[redo]
+                    A = self.S[self.kind[redo]]
                     A[:, np.arange(self.width), np.arange(self.width)] += (k * closed)[redo]
                     self._inverse[redo] = np.linalg.inv(A)
             self._rest, self._closed = rest, closed
@@ -275,15 +278,14 @@ class Windows:
         Returns
         -------
         index : ndarray, shape (B, W)
-            Sleeper of each column (``-1`` .. ``n``: beyond the section, the copies of the
-            end sleepers).
+            Sleeper of each column (``loads.index``).
         support_force : ndarray, shape (B, W)
             Total support force, rest state included [N].
         deflection : ndarray, shape (B, W)
             Total rail deflection [m].
         """
         inverse = self._inverses(rest)
-        k, g, u0 = self._padded_values(rest)
+        k, g, u0 = self._padded
         support, y, unsettled = _window_solve(inverse, loads.centre, k, g, u0, loads.force,
                                               loads.closed, MAX_SWEEPS)  # fmt: skip
         if unsettled:
@@ -291,21 +293,21 @@ class Windows:
                 f"rail-seat forces: the contact of {unsettled} wheel positions did not settle "
                 f"in {MAX_SWEEPS} iterations"
             )
-        return self.index[loads.centre] - (self.beam.half + 1), support, y
+        return loads.index, support, y
 
 
 @njit(cache=True, nogil=True)
-def _condensed_loads(x, coupling, centre, position, load):
+def _condensed_loads(x, coupling, kind, centre, position, load):
     """Condensed nodal forces ``f_w - Tᵀ f_t`` of point loads on each row's window, (B, W)
     [N]: each load's consistent nodal forces (`trackdyn.beam.elements.hermite`) on the two
     nodes of its element, the held end nodes dropped, and the rotations' part carried onto
-    the deflections by ``T = Ktt⁻¹ Ktw`` (``coupling``, (n, W, W)); loads outside the
+    the deflections by ``T = Ktt⁻¹ Ktw`` (``coupling[kind[i]]`` for window ``i``); loads outside the
     window are dropped."""
     B, L = position.shape
     W = x.shape[1] - 2
     out = np.zeros((B, W))
     for b in range(B):
-        xb, tb = x[centre[b]], coupling[centre[b]]
+        xb, tb = x[centre[b]], coupling[kind[centre[b]]]
         for a in range(L):
             p = position[b, a]
             if not (xb[0] <= p <= xb[W + 1]):

@@ -108,24 +108,23 @@ def wheel_forces(run, ballast, model, previous=None) -> list:
     pos = ballast.position
     n = pos.size
     centre = run.centre
-    load = np.maximum(run.wheel_load, 0.0)
     placed = []
     for r, rail in enumerate(RAILS):
         mine = [(j, c, x) for j, (c, x, rl) in enumerate(wheels(model)) if rl == rail]
         offsets = np.array([x for _, _, x in mine])
-        rows_pos, rows_load = [], []
-        for _, _, x in mine:  # that wheel over each sleeper
-            at = pos - x  # vehicle centre [m]
-            rows_pos.append(at[:, None] + offsets[None, :])
-            at_contact = {c: np.interp(at, centre, load[:, c]) for c in {c for _, c, _ in mine}}
-            rows_load.append(np.stack([at_contact[c] for _, c, _ in mine], 1))
         # rows sleeper after sleeper (each wheel over it in turn): one window's rows together
         sleeper = np.repeat(np.arange(n), len(mine))
-        closed = None if previous is None else previous[r][1].closed
-        at = np.stack(rows_pos, 1).reshape(sleeper.size, -1)
-        rows = ballast.wheel_forces(
-            r, sleeper, at, np.stack(rows_load, 1).reshape(at.shape), closed
+        at = (pos[:, None] - offsets[None, :]).ravel()  # vehicle centre of each row [m]
+        # the loads of the run's contacts there (not below zero), linear between its stored
+        # samples; beyond them, the nearest
+        lo = np.clip(np.searchsorted(centre, at, side="right") - 1, 0, centre.size - 2)
+        part = np.clip((at - centre[lo]) / (centre[lo + 1] - centre[lo]), 0.0, 1.0)[:, None]
+        a, b = (
+            np.maximum(run.wheel_load[i][:, [c for _, c, _ in mine]], 0.0) for i in (lo, lo + 1)
         )
+        row_load = a + (b - a) * part
+        closed = None if previous is None else previous[r][1].closed
+        rows = ballast.wheel_forces(r, sleeper, at[:, None] + offsets[None, :], row_load, closed)
         placed.append(([j for j, _, _ in mine], rows))
     return placed
 
