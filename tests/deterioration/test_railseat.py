@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from trackdyn.beam.railseat import RailBeam, Windows, _ldl_solve, peak_per_sleeper, rest_state
+from trackdyn.beam.railseat import RailBeam, Windows, _ldl_solve, rest_state
 from trackdyn.beam.static import linear_supports, solve_beam
 from trackdyn.deterioration.ballast import Ballast
 from trackdyn.track.rails import rail_section
@@ -105,19 +105,26 @@ def test_forces_do_not_depend_on_the_rest_states_solved_before():
         np.testing.assert_allclose(a, b, rtol=1e-10, atol=1e-12 * np.abs(b).max())
 
 
-def test_peak_per_sleeper_is_the_largest_force_of_each_sleeper():
-    """Against numpy's unbuffered ``maximum.at`` on the same rows; columns beyond the
-    section (index -1 and n) are dropped, a sleeper no row reaches gets 0."""
-    rng = np.random.default_rng(3)
-    n, rows, width = 40, 30, 21
-    index = rng.integers(-1, n + 1, (rows, width))
-    index[index == 7] = 8  # sleeper 7 is reached by no row
-    force = rng.uniform(0.0, 6e4, (rows, width))
-    expected = np.zeros(n)
-    inside = (index >= 0) & (index < n)
-    np.maximum.at(expected, index[inside], force[inside])
-    np.testing.assert_array_equal(peak_per_sleeper(index, force, n), expected)
-    assert peak_per_sleeper(index, force, n)[7] == 0.0
+def test_peaks_are_the_largest_force_of_each_sleeper_per_wheel():
+    """`Windows.peaks` (row ``b`` is wheel ``b % wheels``'s), against numpy's unbuffered
+    ``maximum.at`` over the rows of the full solve, to the bit: a bogie's two wheels over
+    sleepers 20-40 of 100, on ballast with a 1 mm void; the columns beyond the section are
+    dropped and a sleeper no row reaches gets 0."""
+    b = ballast(1.0e-3)
+    n = b.position.size
+    centre = np.repeat(np.arange(20, 41), 2)  # each wheel over each sleeper in turn
+    at = b.position[centre][:, None] + WHEELS[None, :] - np.tile([0.0, WHEELS[1]], 21)[:, None]
+    loads = np.tile(LOADS, (centre.size, 1))
+    index, force, _ = b.wheel_solve(0, b.initial, centre, at, loads)
+    peaks = b.peak_forces(0, b.initial, b.wheel_forces(0, centre, at, loads), 2)
+    for wheel in range(2):
+        expected = np.zeros(n)
+        rows = slice(wheel, None, 2)
+        inside = (index[rows] >= 0) & (index[rows] < n)
+        np.maximum.at(expected, index[rows][inside], force[rows][inside])
+        np.testing.assert_array_equal(peaks[wheel], expected)
+    assert np.all(peaks[:, :5] == 0.0) and np.all(peaks[:, 60:] == 0.0)
+    assert np.all(peaks[:, 25:36] > 0.0)
 
 
 def test_window_inverses_follow_supports_that_open_and_close():

@@ -284,16 +284,39 @@ class Windows:
         deflection : ndarray, shape (B, W)
             Total rail deflection [m].
         """
+        support, y, _ = self._solved(rest, loads, 1, True)
+        return loads.index, support, y
+
+    def peaks(self, rest: RailRest, loads: WindowLoads, wheels: int):
+        """Largest support force of each sleeper over the rows of each wheel, (wheels, n)
+        [N]: row ``b`` is wheel ``b % wheels``'s (0 where no row reaches a sleeper); as
+        `solve`, without its arrays per row.
+
+        Parameters
+        ----------
+        rest : RailRest
+            The rail at rest.
+        loads : WindowLoads
+            The wheel loads placed on the windows (`load_vector`), the rows of ``wheels``
+            wheels in turn.
+        wheels : int
+            Wheels [-].
+        """
+        return self._solved(rest, loads, wheels, False)[2]
+
+    def _solved(self, rest: RailRest, loads: WindowLoads, wheels: int, rows: bool):
+        """`_window_solve` on ``rest``: support forces and deflections per row (when
+        ``rows``, else empty) and the peaks per wheel and sleeper."""
         inverse = self._inverses(rest)
         k, g, u0 = self._padded
-        support, y, unsettled = _window_solve(inverse, loads.centre, k, g, u0, loads.force,
-                                              loads.closed, MAX_SWEEPS)  # fmt: skip
-        if unsettled:
+        out = _window_solve(inverse, loads.centre, k, g, u0, loads.force, loads.closed,
+                            MAX_SWEEPS, self.beam.half, wheels, rows)  # fmt: skip
+        if out[3]:
             raise TrackdynInputError(
-                f"rail-seat forces: the contact of {unsettled} wheel positions did not settle "
+                f"rail-seat forces: the contact of {out[3]} wheel positions did not settle "
                 f"in {MAX_SWEEPS} iterations"
             )
-        return loads.index, support, y
+        return out[:3]
 
 
 @njit(cache=True, nogil=True)
@@ -401,10 +424,12 @@ def _ldl_solve(c, z, m):
 
 
 @njit(cache=True, nogil=True)
-def _window_solve(inverse, centre, k, g, u0, force, start, max_sweeps):
+def _window_solve(inverse, centre, k, g, u0, force, start, max_sweeps, half, wheels, rows):
     """Support force and rail deflection of each row's window, its supports iterated from
     ``start`` (B, W), each row's starting set of closed supports, overwritten with its
-    solution's.
+    solution's; and the largest support force of each sleeper over the rows of each of
+    ``wheels`` wheels (row ``b`` is wheel ``b % wheels``'s; column ``j`` of row ``b`` is
+    sleeper ``centre[b] + j - half``; sleepers beyond the section dropped).
 
     Row ``b`` solves ``(A + diag(k closed)) v = force[b] - k closed (u0 - g)`` on window
     ``centre[b]`` (padded sleepers ``centre[b] + 1`` onwards of ``k``, ``g``, ``u0``) from
@@ -423,14 +448,18 @@ def _window_solve(inverse, centre, k, g, u0, force, start, max_sweeps):
     Returns
     -------
     support_force : ndarray, shape (B, W)
-        Total support force, rest state included [N].
+        Total support force, rest state included [N] (no rows unless ``rows``).
     deflection : ndarray, shape (B, W)
-        Total rail deflection ``u0 + v`` [m].
+        Total rail deflection ``u0 + v`` [m] (no rows unless ``rows``).
+    peak : ndarray, shape (wheels, n)
+        Largest support force of each sleeper per wheel (0 where no row reaches it) [N].
     unsettled : int
         Rows whose set of closed supports still changed after ``max_sweeps`` solves.
     """
     B, W = force.shape
-    support, deflection = np.empty((B, W)), np.empty((B, W))
+    n = k.size - 2 * (half + 1)
+    support, deflection = np.empty((B if rows else 0, W)), np.empty((B if rows else 0, W))
+    peak = np.zeros((wheels, n))
     closed0, closed = np.empty(W, np.bool_), np.empty(W, np.bool_)
     idx = np.empty(W, np.int64)
     kb, gb, ub, base = np.empty(W), np.empty(W), np.empty(W), np.empty(W)
@@ -481,33 +510,14 @@ def _window_solve(inverse, centre, k, g, u0, force, start, max_sweeps):
                 break
             if sweep == max_sweeps - 1:
                 unsettled += 1
+        wheel = b % wheels
         for j in range(W):
             start[b, j] = closed[j]
             y = ub[j] + v[j]
-            deflection[b, j] = y
-            support[b, j] = kb[j] * max(y - gb[j], 0.0)
-    return support, deflection, unsettled
-
-
-@njit(cache=True, nogil=True)
-def peak_per_sleeper(index, force, n: int):
-    """Largest support force of each sleeper over the rows of `Windows.solve`, (n,) [N]
-    (0 where no row reaches it; columns beyond the section dropped).
-
-    Parameters
-    ----------
-    index : ndarray, shape (B, W)
-        Sleeper of each column.
-    force : ndarray, shape (B, W)
-        Support force [N].
-    n : int
-        Sleepers of the section.
-    """
-    out = np.zeros(n)
-    B, W = index.shape
-    for b in range(B):
-        for j in range(W):
-            i = index[b, j]
-            if 0 <= i < n and force[b, j] > out[i]:
-                out[i] = force[b, j]
-    return out
+            f = kb[j] * max(y - gb[j], 0.0)
+            if rows:
+                deflection[b, j], support[b, j] = y, f
+            i = centre[b] + j - half
+            if 0 <= i < n and f > peak[wheel, i]:
+                peak[wheel, i] = f
+    return support, deflection, peak, unsettled

@@ -329,6 +329,11 @@ class Ballast:
         """`wheel_solve` for wheel loads already placed on the windows (`wheel_forces`)."""
         return self.windows[r].solve(state.rails[r], loads)
 
+    def peak_forces(self, r: int, state: BallastState, loads: WindowLoads, wheels: int):
+        """Largest rail-seat force of each sleeper of rail ``r`` over the rows of each of
+        ``wheels`` wheels, (wheels, sleepers) [N] (`Windows.peaks`)."""
+        return self.windows[r].peaks(state.rails[r], loads, wheels)
+
     def _secant(self, state: BallastState, static_load: float):
         """Beam secant stiffness [N/m] and mean deflection [m] under ``Ps (1 ± δ)`` (the
         loads placed on the windows once per static load)."""

@@ -30,7 +30,6 @@ import time
 
 import numpy as np
 
-from trackdyn.beam.railseat import peak_per_sleeper
 from trackdyn.errors import TrackdynInputError
 from trackdyn.simulation import run_batch, time_step
 from trackdyn.solver.discrete import stable_step
@@ -149,10 +148,7 @@ def passage_loads(placed, ballast, state) -> np.ndarray:
     n = ballast.position.size
     out = np.zeros((sum(len(mine) for mine, _ in placed), n))
     for r, (mine, rows) in enumerate(placed):
-        index, support, _ = ballast.force_solve(r, state, rows)
-        for k, j in enumerate(mine):
-            wheel = slice(k, None, len(mine))
-            out[j] = peak_per_sleeper(index[wheel], support[wheel], n)
+        out[mine] = ballast.peak_forces(r, state, rows, len(mine))
     return out
 
 
