@@ -165,12 +165,19 @@ class WindowLoads:
         Each row's closed supports in its latest solve (all closed before the first),
         where the next solve starts: the ballast changes little between solves, so that
         the set is mostly right at once.
+    base : ndarray, shape (B, W)
+        Each row's ``A^-1 force`` with its window's inverse (`Windows`) [m], kept while
+        that inverse stays as it is (most windows, from one rest state to the next).
+    seen : ndarray of int, shape (B,)
+        The version of its window's inverse that ``base`` was formed with (0: none yet).
     """
 
     centre: np.ndarray
     index: np.ndarray
     force: np.ndarray
     closed: np.ndarray
+    base: np.ndarray
+    seen: np.ndarray
 
 
 class Windows:
@@ -209,6 +216,7 @@ class Windows:
         self.index = np.arange(n)[:, None] + np.arange(self.width)[None, :] + 1  # padded
         self._rest: RailRest | None = None  # the rest state the inverses below belong to
         self._flips = np.zeros(n, np.int64)  # rank-one changes since formed in full
+        self._version = np.zeros(n, np.int64)  # changes of each window's inverse
         self._closed: np.ndarray | None = None  # its closed supports per window
         self._inverse: np.ndarray = np.empty((0, self.width, self.width))  # sized at first use
         self._padded: tuple = ()  # the rest state's values per sleeper, padded
@@ -229,7 +237,9 @@ class Windows:
         centre = np.asarray(centre)
         force = _condensed_loads(self.x, self.T, self.kind, centre, position, load)
         start = np.ones(force.shape, np.bool_) if closed is None else np.array(closed)
-        return WindowLoads(centre, self.index[centre] - (self.beam.half + 1), force, start)
+        index = self.index[centre] - (self.beam.half + 1)
+        return WindowLoads(centre, index, force, start, np.empty(force.shape),
+                           np.zeros(centre.size, np.int64))  # fmt: skip
 
     def _inverses(self, rest: RailRest) -> np.ndarray:
         """Inverse window matrices with the rest state's closed supports, (n, W, W) [m/N].
@@ -237,8 +247,9 @@ class Windows:
         Formed in full at the first rest state; after that, each support that opened or
         closed since the last rest state is a rank-one change of the windows that hold it
         (`_flip_supports`, Sherman-Morrison), and a window is formed in full again after
-        `MAX_FLIPS` of them (round-off). Keeps the rest state's stiffness, gap and rest
-        deflection per sleeper, padded (`RailBeam.padded`), for `solve`.
+        `MAX_FLIPS` of them (round-off). Each window's version counts its changes
+        (`WindowLoads.base`). Keeps the rest state's stiffness, gap and rest deflection per
+        sleeper, padded (`RailBeam.padded`), for `solve`.
         """
         if self._rest is not rest:
             b = self.beam
@@ -249,13 +260,15 @@ class Windows:
                 A = self.S[self.kind]
                 A[:, np.arange(self.width), np.arange(self.width)] += k * closed
                 self._inverse = np.linalg.inv(A)
+                self._version += 1
             else:
                 redo = _flip_supports(self._inverse, self._closed, closed, k, self._flips,
-                                      MAX_FLIPS)  # fmt: skip
+                                      self._version, MAX_FLIPS)  # fmt: skip
                 if redo.size:
                     A = self.S[self.kind[redo]]
                     A[:, np.arange(self.width), np.arange(self.width)] += (k * closed)[redo]
                     self._inverse[redo] = np.linalg.inv(A)
+                    self._version[redo] += 1
             self._rest, self._closed = rest, closed
         return self._inverse
 
@@ -309,8 +322,9 @@ class Windows:
         ``rows``, else empty) and the peaks per wheel and sleeper."""
         inverse = self._inverses(rest)
         k, g, u0 = self._padded
-        out = _window_solve(inverse, loads.centre, k, g, u0, loads.force, loads.closed,
-                            MAX_SWEEPS, self.beam.half, wheels, rows)  # fmt: skip
+        rows_in = (loads.centre, loads.force, loads.closed, loads.base, loads.seen)
+        out = _window_solve(inverse, self._version, *rows_in, k, g, u0, MAX_SWEEPS,
+                            self.beam.half, wheels, rows)  # fmt: skip
         if out[3]:
             raise TrackdynInputError(
                 f"rail-seat forces: the contact of {out[3]} wheel positions did not settle "
@@ -358,7 +372,7 @@ MAX_FLIPS = 32
 
 
 @njit(cache=True, nogil=True)
-def _flip_supports(inverse, before, after, k, flips, max_flips):
+def _flip_supports(inverse, before, after, k, flips, version, max_flips):
     """Update each window's inverse for the supports that opened or closed, in place.
 
     Closing support ``j`` of stiffness ``k`` adds ``d = k`` at ``(j, j)``, opening it
@@ -366,7 +380,7 @@ def _flip_supports(inverse, before, after, k, flips, max_flips):
     symmetric ``A^-1`` (Sherman-Morrison; ``1 + d c_j > 0`` as the window stays positive
     definite with its ends held). Returns the windows with more than ``max_flips``
     changes since they were last formed in full (``flips`` counts them), left for the
-    caller to form again.
+    caller to form again; ``version`` counts each window changed.
     """
     n, W = before.shape
     col = np.empty(W)
@@ -379,6 +393,7 @@ def _flip_supports(inverse, before, after, k, flips, max_flips):
             if flips[w] > max_flips:
                 again[w] = True
                 break
+            version[w] += 1
             inv = inverse[w]
             d = k[w, j] if after[w, j] else -k[w, j]
             for i in range(W):
@@ -424,12 +439,16 @@ def _ldl_solve(c, z, m):
 
 
 @njit(cache=True, nogil=True)
-def _window_solve(inverse, centre, k, g, u0, force, start, max_sweeps, half, wheels, rows):
+def _window_solve(inverse, version, centre, force, start, base_rows, seen, k, g, u0,
+                  max_sweeps, half, wheels, rows):  # fmt: skip
     """Support force and rail deflection of each row's window, its supports iterated from
     ``start`` (B, W), each row's starting set of closed supports, overwritten with its
-    solution's; and the largest support force of each sleeper over the rows of each of
-    ``wheels`` wheels (row ``b`` is wheel ``b % wheels``'s; column ``j`` of row ``b`` is
-    sleeper ``centre[b] + j - half``; sleepers beyond the section dropped).
+    solution's; each row's ``A^-1 force[b]`` kept in ``base_rows`` (B, W) while its
+    window's inverse stays at the ``version`` (per window) in ``seen`` (B,), formed again
+    (and ``seen`` updated) when it changed; and the largest support force of each sleeper
+    over the rows of each of ``wheels`` wheels (row ``b`` is wheel ``b % wheels``'s;
+    column ``j`` of row ``b`` is sleeper ``centre[b] + j - half``; sleepers beyond the
+    section dropped).
 
     Row ``b`` solves ``(A + diag(k closed)) v = force[b] - k closed (u0 - g)`` on window
     ``centre[b]`` (padded sleepers ``centre[b] + 1`` onwards of ``k``, ``g``, ``u0``) from
@@ -462,21 +481,23 @@ def _window_solve(inverse, centre, k, g, u0, force, start, max_sweeps, half, whe
     peak = np.zeros((wheels, n))
     closed0, closed = np.empty(W, np.bool_), np.empty(W, np.bool_)
     idx = np.empty(W, np.int64)
-    kb, gb, ub, base = np.empty(W), np.empty(W), np.empty(W), np.empty(W)
+    kb, gb, ub = np.empty(W), np.empty(W), np.empty(W)
     v, d, e, z, c = np.empty(W), np.empty(W), np.empty(W), np.empty(W), np.empty((W, W))
     unsettled = 0
     for b in range(B):
-        inv, first = inverse[centre[b]], centre[b] + 1
+        inv, first, base = inverse[centre[b]], centre[b] + 1, base_rows[b]
         for j in range(W):
             kb[j], gb[j], ub[j] = k[first + j], g[first + j], u0[first + j]
             closed0[j] = ub[j] > gb[j]
             closed[j] = start[b, j]
-        for i in range(W):
-            base[i] = 0.0
-        for j in range(W):  # A^-1 is symmetric: its rows as columns, no serial sum
-            f = force[b, j]
+        if seen[b] != version[centre[b]]:
+            seen[b] = version[centre[b]]
             for i in range(W):
-                base[i] += inv[j, i] * f
+                base[i] = 0.0
+            for j in range(W):  # A^-1 is symmetric: its rows as columns, no serial sum
+                f = force[b, j]
+                for i in range(W):
+                    base[i] += inv[j, i] * f
         for sweep in range(max_sweeps):
             m = 0
             for j in range(W):
