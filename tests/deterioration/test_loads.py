@@ -68,3 +68,40 @@ def test_the_loops_time_step_keeps_wheel_loads_within_a_percent(vehicle, toleran
     ]
     error = np.abs(loads[0] - loads[1]).max() / veh.static_wheel_load
     assert 0.1 * tolerance < error < tolerance
+
+
+def test_each_wheel_over_each_sleeper_carries_its_contacts_load_at_that_moment():
+    """`wheel_forces` places, for each wheel over each sleeper, every wheel of the rail with
+    its contact's load when the vehicle centre was there: against ``numpy.interp`` of each
+    contact's stored loads (not below zero) at that centre, nearest beyond the stored
+    samples, placed by `Ballast.wheel_forces` (to round-off: 1e-12 of the forces). The run
+    is stored every 0.37 m from 5 m into the 60 m section, so that sleepers fall between
+    samples and the first ones before them; some loads are negative (a wheel off the
+    rail)."""
+    from types import SimpleNamespace
+
+    from trackdyn.deterioration.ballast import Ballast
+    from trackdyn.deterioration.loads import wheel_forces, wheels
+    from trackdyn.track.rails import rail_section
+    from trackdyn.track.synthetic import synthetic_track
+    from trackdyn.track.track import RAILS
+
+    trk = synthetic_track(60.0, spectrum=None, stiffness_cov=0.0, gap=0.0, seed=1)
+    b = Ballast(trk.linearise(120e3, 0.3), rail_section("60E1"), 125.5)
+    model = build_model("11dof", LOADED)
+    centre = 5.0 + 0.37 * np.arange(150)
+    rng = np.random.default_rng(6)
+    load = rng.uniform(-2e4, 1.5e5, (centre.size, len(model.contact_rails)))
+    placed = wheel_forces(SimpleNamespace(centre=centre, wheel_load=load), b, model)
+    every = wheels(model)
+    for r, rail in enumerate(RAILS):
+        mine = [(c, x) for c, x, rl in every if rl == rail]
+        offsets = np.array([x for _, x in mine])
+        sleeper = np.repeat(np.arange(b.position.size), len(mine))
+        at = b.position[sleeper] - np.tile(offsets, b.position.size)
+        loads = np.stack([np.interp(at, centre, np.maximum(load[:, c], 0.0)) for c, _ in mine], 1)
+        expected = b.wheel_forces(r, sleeper, at[:, None] + offsets[None, :], loads).force
+        got = placed[r][1]
+        assert placed[r][0] == [j for j, (_, _, rl) in enumerate(every) if rl == rail]
+        np.testing.assert_array_equal(got.centre, sleeper)
+        np.testing.assert_allclose(got.force, expected, rtol=0, atol=1e-12 * np.abs(expected).max())

@@ -115,13 +115,12 @@ def wheel_forces(run, ballast, model, previous=None) -> list:
         sleeper = np.repeat(np.arange(n), len(mine))
         at = (pos[:, None] - offsets[None, :]).ravel()  # vehicle centre of each row [m]
         # the loads of the run's contacts there (not below zero), linear between its stored
-        # samples; beyond them, the nearest
-        lo = np.clip(np.searchsorted(centre, at, side="right") - 1, 0, centre.size - 2)
-        part = np.clip((at - centre[lo]) / (centre[lo + 1] - centre[lo]), 0.0, 1.0)[:, None]
-        a, b = (
-            np.maximum(run.wheel_load[i][:, [c for _, c, _ in mine]], 0.0) for i in (lo, lo + 1)
-        )
-        row_load = a + (b - a) * part
+        # samples (evenly spaced, `Run.centre`); beyond them, the nearest
+        where = np.clip((at - centre[0]) / (centre[1] - centre[0]), 0.0, centre.size - 1.0)
+        lo = np.minimum(where.astype(np.int64), centre.size - 2)[:, None]
+        contacts = np.array([c for _, c, _ in mine])[None, :]
+        a, b = (np.maximum(run.wheel_load[i, contacts], 0.0) for i in (lo, lo + 1))
+        row_load = a + (b - a) * (where[:, None] - lo)
         closed = None if previous is None else previous[r][1].closed
         rows = ballast.wheel_forces(r, sleeper, at[:, None] + offsets[None, :], row_load, closed)
         placed.append(([j for j, _, _ in mine], rows))
