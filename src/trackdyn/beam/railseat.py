@@ -30,9 +30,8 @@ from functools import cached_property
 
 import numpy as np
 from numba import njit
-from scipy.linalg import solveh_banded
 
-from trackdyn.beam.elements import element_stiffness, stiffness_band
+from trackdyn.beam.elements import element_stiffness, solve_band, stiffness_band
 from trackdyn.errors import TrackdynInputError
 
 MAX_SWEEPS = 60
@@ -136,7 +135,7 @@ def rest_state(beam: RailBeam, gap, closed=None) -> RailRest:
         A[3, w] += kc
         rhs = np.zeros(2 * n)
         rhs[w] = beam.weight + kc * gap
-        y = solveh_banded(A, rhs, check_finite=False)[w]
+        y = solve_band(A, rhs)[w]
         now = y > gap
         if np.array_equal(now, closed):
             return RailRest(gap, y, k * np.maximum(y - gap, 0.0), closed)
