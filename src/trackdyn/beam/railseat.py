@@ -202,7 +202,7 @@ class Windows:
                                    return_inverse=True)  # fmt: skip
         ke = element_stiffness(lengths[first], beam.EI)  # (windows, W + 1, 4, 4)
         ndof = 2 * (self.width + 2)
-        K = np.zeros((lengths.shape[0], ndof, ndof))
+        K = np.zeros((first.size, ndof, ndof))
         for e in range(ke.shape[1]):
             K[:, 2 * e : 2 * e + 4, 2 * e : 2 * e + 4] += ke[:, e]
         inner = np.arange(2, ndof - 2)
