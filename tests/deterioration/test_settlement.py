@@ -254,6 +254,30 @@ def test_varandas_closed_forms():
     assert inc(1.0)[0, 0] < 0.1 * total  # loads below those already seen add little
 
 
+def test_varandas_cells_that_grow_alike_are_evaluated_once_to_the_same_settlement():
+    """The load histogram's cells of one rail seat with the same history and cycles are
+    made one (their weights added) for the increment: over five steps of two vehicles at
+    random loads (20-130 kN) on 2 x 4 rail seats, the increment and each vehicle's part
+    of it equal the sum over every cell, ``(gamma / M) Σ w_k (S(h_k + r_k ΔM) - S(h_k))``,
+    to round-off (1e-10)."""
+    from trackdyn.deterioration.accumulation import LOAD_GRID
+
+    law = load_law("varandas")
+    acc, rng, a, dm = memory(law, (2, 4), 2), np.random.default_rng(12), law.alpha + 1, 0.3
+    for _ in range(5):
+        cycles = [(v, r, 1e5 * (v + 1), rng.uniform(20e3, 130e3, 4), np.full(4, 1e8))
+                  for v in range(2) for r in range(2)]  # fmt: skip
+        increment = acc.prepare(cycles)
+        h, rate = acc.h, acc._rate
+        w = np.diff((np.arange(h.shape[-1] + 1) * LOAD_GRID) ** a) / a
+        cells = w * (harmonic(h + rate * dm, law.beta) - harmonic(h, law.beta))
+        direct = law.gamma / law.M * cells.sum(-1)
+        np.testing.assert_allclose(increment(dm), direct, rtol=1e-10)
+        parts = acc.advance(dm)
+        np.testing.assert_allclose(parts.sum(0), direct, rtol=1e-10)
+        assert np.all(parts > 0)  # each vehicle's cycles reach cells the other's do not
+
+
 @pytest.mark.parametrize("name", list(LAWS))
 def test_load_sensitivity_is_the_slope_of_settlement_against_load(name):
     # The loop's stable step rests on d ln e / d ln Q. Measured here through the

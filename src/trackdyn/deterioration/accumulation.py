@@ -147,9 +147,10 @@ class LoadHistory(Hardening):
         a = law.alpha + 1
         weight = np.diff(edges**a) / a
         on = np.nonzero(total > 0)
-        h, rk, wk = self.h[on], total[on], weight[on[-1]]
-        shares = rate[(slice(None), *on)] / rk
-        flat = np.ravel_multi_index(on[:2], shape)
+        h, rk, wk, parts, flat = _merged(self.h[on], total[on], weight[on[-1]],
+                                         rate[(slice(None), *on)],
+                                         np.ravel_multi_index(on[:2], shape))  # fmt: skip
+        shares = parts / rk
         base = harmonic(h, law.beta)
         scale = law.gamma / law.M
 
@@ -175,6 +176,20 @@ class LoadHistory(Hardening):
 
     def restart(self, held, mgt: float) -> None:
         self.h = np.where(np.asarray(held)[..., None], self._rate * mgt, self.h)
+
+
+def _merged(h, rate, weight, parts, seat):
+    """The cells of `LoadHistory` with those of one rail seat that have the same history
+    ``h`` and the same cycles per MGT of each vehicle (``parts``, (vehicles, cells)) made
+    one, their weights added: the cells below every load the seat has carried, most of
+    them, all grow alike. Returns ``h``, ``rate``, ``weight``, ``parts`` and ``seat`` of
+    the merged cells; their increment is the cells' own to round-off."""
+    keys = np.vstack([seat, h, parts])
+    order = np.lexsort(keys[::-1])  # seat first, then h, then each vehicle's cycles
+    keys = keys[:, order]
+    first = np.flatnonzero(np.r_[True, np.any(keys[:, 1:] != keys[:, :-1], axis=0)])
+    pick = order[first]
+    return h[pick], rate[pick], np.add.reduceat(weight[order], first), parts[:, pick], seat[pick]
 
 
 def memory(law, shape, vehicles: int) -> Hardening:
