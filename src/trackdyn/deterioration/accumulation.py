@@ -179,17 +179,17 @@ class LoadHistory(Hardening):
 
 
 def _merged(h, rate, weight, parts, seat):
-    """The cells of `LoadHistory` with those of one rail seat that have the same history
+    """The cells of `LoadHistory` in a row of one rail seat that have the same history
     ``h`` and the same cycles per MGT of each vehicle (``parts``, (vehicles, cells)) made
     one, their weights added: the cells below every load the seat has carried, most of
-    them, all grow alike. Returns ``h``, ``rate``, ``weight``, ``parts`` and ``seat`` of
-    the merged cells; their increment is the cells' own to round-off."""
-    keys = np.vstack([seat, h, parts])
-    order = np.lexsort(keys[::-1])  # seat first, then h, then each vehicle's cycles
-    keys = keys[:, order]
-    first = np.flatnonzero(np.r_[True, np.any(keys[:, 1:] != keys[:, :-1], axis=0)])
-    pick = order[first]
-    return h[pick], rate[pick], np.add.reduceat(weight[order], first), parts[:, pick], seat[pick]
+    them, all grow alike. The cells come seat after seat, in order of load. Returns
+    ``h``, ``rate``, ``weight``, ``parts`` and ``seat`` of the merged cells; their increment
+    is the cells' own to round-off."""
+    alike = (
+        (seat[1:] == seat[:-1]) & (h[1:] == h[:-1]) & np.all(parts[:, 1:] == parts[:, :-1], axis=0)
+    )
+    first = np.flatnonzero(np.r_[True, ~alike])
+    return h[first], rate[first], np.add.reduceat(weight, first), parts[:, first], seat[first]
 
 
 def memory(law, shape, vehicles: int) -> Hardening:
