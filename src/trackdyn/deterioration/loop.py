@@ -129,8 +129,8 @@ class LoopOptions(Strict):
         tampings of 0.5 mm steps (91 steps against 153) to 0.5 MGT through 240 MGT and to
         6 MGT after (270.2 against 275.8 MGT, after which the bridge segment's last
         tamping, at 291 MGT, falls within the horizon only with 1 mm steps), and the
-        Varandas law takes 29 steps (its D1 SD moving by up to 2 % between limits of 0.5,
-        1 and 2 mm, without a trend, and by as much with round-off: 29 to 33 steps).
+        Varandas law takes 29-42 steps (its D1 SD moving by up to 2 % between limits of
+        0.5, 1 and 2 mm, without a trend, and by as much with round-off).
     snapshot_every_mgt : float
         Tonnage between stored geometry snapshots [MGT].
     threshold_sd_mm : float
