@@ -28,6 +28,7 @@ from trackdyn.solver.central import (
     run_matrices,
     step_matrices,
 )
+from trackdyn.solver.lanewise import vectorised
 from trackdyn.solver.statics import widths
 from trackdyn.vehicle.models import MODELS, build_model
 from trackdyn.vehicle.parameters import load_vehicle
@@ -104,11 +105,12 @@ def batch(model, k, r, repeat):
         lane_z = in_lanes(z, take)
         status = np.zeros((runs, 2), np.int64)
         t = time.perf_counter()
-        advance_groups(
-            *lane_mats, lane["static"], k_lanes, r_lanes, np.zeros((n_groups, 0, nc, LANES, 0)),
-            lane["y_start"], lane["y_step"], count, lane_z, lane["dt"], 0, lane["every"], 50,
-            lane["row0"], *out, status[: take.size].reshape(n_groups, LANES, 2),
-        )  # fmt: skip
+        with vectorised():
+            advance_groups(
+                *lane_mats, lane["static"], k_lanes, r_lanes, np.zeros((n_groups, 0, nc, LANES, 0)),
+                lane["y_start"], lane["y_step"], count, lane_z, lane["dt"], 0, lane["every"], 50,
+                lane["row0"], *out, status[: take.size].reshape(n_groups, LANES, 2),
+            )  # fmt: skip
         advance_runs(
             *run_mats, alone["static"], k_one, r_one, np.zeros((0, nc, 0)), alone["y_start"],
             alone["y_step"], in_start, z[one], alone["dt"], 0, alone["every"], 50,

@@ -47,6 +47,7 @@ import numpy as np
 from numba import njit, prange
 
 from trackdyn.errors import TrackdynInputError
+from trackdyn.solver.lanewise import FASTMATH, LANES, lanewise, load, store, total, vectorised
 from trackdyn.solver.statics import (
     Problem,
     contact_table,
@@ -73,16 +74,6 @@ DONE, NEWTON_FAILED, NOT_FINITE, NOT_STARTED = 0, 1, 2, 3
 """How `advance` ends: all steps done; no Newton solution at a step; a stored
 displacement not finite. `advance_lanes` leaves runs in any state but `DONE` alone
 (`NOT_STARTED`: no start state)."""
-
-LANES = 8
-"""Runs of one model in a group of the vector lanes (`advance_lanes`): a compile-time
-constant, so that each loop over the lanes is a fixed number of instructions, without a
-remainder (8 doubles fill an AVX-512 register). Fewer runs than this go one by one
-(`advance_runs`): a group costs as much with fewer lanes filled."""
-
-FASTMATH = {"nnan", "ninf", "nsz", "contract", "afn"}
-"""LLVM's fast-math flags of the loops: all but reassociation, so that a run's sums are
-done in the same order alone and in the lanes (the same results, to the bit)."""
 
 STEP_JIT: dict[str, Any] = dict(
     cache=True, fastmath=FASTMATH, error_model="numpy", nogil=True, _nrt=False
@@ -289,6 +280,24 @@ def advance(
     return DONE, -1
 
 
+_fma = lanewise("c + a * b")
+_fms = lanewise("c - a * b")
+_fma_difference = lanewise("c + a * (p - q)")
+_product = lanewise("a * b")
+_spring = lanewise("k * (x - r)")
+_normal = lanewise("0.0 if d + o < 0.0 else d + o")
+_slip_force = lanewise("0.0 if s == 0 else (u if s == 1 else -d)")
+_stick_bit = lanewise("m + (K if s == 0 else 0)")
+_new_state = lanewise("1 if c * v > u else (2 if c * v < -d else 0)")
+_changed = lanewise("h | (1 if n != s else 0)")
+_stick_force = lanewise("c * v if s == 0 else f")
+_select = lanewise("x if g else y")
+_differ = lanewise("1 if h != m else 0")
+_pending = lanewise("h if g else 0")
+"""Operations of `advance_lanes` on the tuples of its lanes (`lanewise`): each the
+expression written in `advance` or `wedge_step`, in every lane."""
+
+
 @njit(cache=True, fastmath=FASTMATH, error_model="numpy", nogil=True)
 def advance_lanes(
     p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dc_idx, dc_val, dw_idx, dw_val,
@@ -302,21 +311,30 @@ def advance_lanes(
     Every array of a run carries the lane axis last, `LANES` long (``z`` is (2n, LANES),
     ``p_val`` (n, width, LANES), ``k_in`` (steps, contacts, LANES), ``table`` (steps,
     contacts, LANES, grid), ...); the sparse rows' column indices are the model's, shared.
-    Lane ``b`` advances ``count[b]`` steps. Every operation of a step is one loop over the
-    lanes, stick/slip and the end of a run selects on each lane's own mask, so that no lane
-    branches on its own. The Newton iteration goes on while a running lane's states
-    change; a lane whose iteration fails or whose stored displacement is not finite stops
-    (its ``status`` row gets what `advance` would return) and is left as it is while the
-    others go on. Its stored steps go to the output rows from ``row0[b]`` on; a lane whose
-    ``status[b, 0]`` is not `DONE` is left alone.
+    Lane ``b`` advances ``count[b]`` steps. Each quantity of a step is a tuple of the
+    lanes' values (`trackdyn.solver.lanewise`); stick/slip and the end of a run are
+    selects on each lane's own mask, so that no lane branches on its own. The Newton
+    iteration goes on while a running lane's states change; a lane whose iteration fails
+    or whose stored displacement is not finite stops (its ``status`` row gets what
+    `advance` would return) and is left as it is while the others go on. Its stored steps
+    go to the output rows from ``row0[b]`` on; a lane whose ``status[b, 0]`` is not `DONE`
+    is left alone.
     """
     n = p_idx.shape[0]
     nc = dc_idx.shape[0]
     nw = dw_idx.shape[0]
     lanes = LANES
     nonlinear = table.shape[0] > 0
+    # one row of the lanes per value
+    pv, gcv, gwv = p_val.reshape(-1, lanes), gc_val.reshape(-1, lanes), gw_val.reshape(-1, lanes)
+    dcv, dwv, hv = dc_val.reshape(-1, lanes), dw_val.reshape(-1, lanes), H.reshape(-1, lanes)
+    wv, kv, rv = wedge.reshape(-1, lanes), k_in.reshape(-1, lanes), r_in.reshape(-1, lanes)
     inv2dt = 0.5 / dt
     invdt2 = 1.0 / (dt * dt)
+    half = load(inv2dt.reshape(1, lanes), 0)
+    zero = load(np.zeros((1, lanes)), 0)
+    none = load(np.zeros((1, lanes), np.int64), 0)
+    every = load(np.ones((1, lanes), np.int64), 0)
     q1 = np.empty((n, lanes))
     fc = np.empty((nc, lanes))
     vfree = np.empty((nw, lanes))
@@ -326,120 +344,110 @@ def advance_lanes(
     f_down = np.empty((nw, lanes))
     F = np.zeros((nw, lanes))
     state = np.zeros((nw, lanes), np.int64)  # 0 stick, 1 slip in compression, 2 in extension
-    mask = np.empty(lanes, np.int64)
-    jl = np.empty((nw, nw, lanes))  # the inverse of each lane's stick/slip states `held`
-    held = np.full(lanes, -1, np.int64)
-    changed = np.empty(lanes, np.int64)
-    run = np.empty(lanes, np.bool_)
+    mask = np.empty((1, lanes), np.int64)
+    jl = np.empty((nw * nw, lanes))  # the inverse of each lane's stick/slip states `held`
+    held = np.full((1, lanes), -1, np.int64)
+    run = np.empty((1, lanes), np.bool_)
     stored = np.zeros(lanes, np.int64)
-    to_store = -step0 % store_every
+    due = -step0 % store_every  # each lane's next stored step
+    next_due = due.min()
+    steps = count.max()
+    next_end = 0  # the next step at which a lane's run may end
     z_bits = z.view(np.int64)
-    for s in range(count.max()):
-        for b in range(lanes):
-            run[b] = status[b, 0] == DONE and s < count[b]
-        for c in range(nc):
+    for s in range(steps):
+        if s == next_end:
+            next_end = steps
             for b in range(lanes):
-                fc[c, b] = 0.0
+                run[0, b] = status[b, 0] == DONE and s < count[b]
+                next_end = min(next_end, count[b]) if count[b] > s else next_end
+        for c in range(nc):
+            x = zero
             for j in range(dc_idx.shape[1]):
-                col = dc_idx[c, j]
-                for b in range(lanes):
-                    fc[c, b] += dc_val[c, j, b] * z[col, b]
+                x = _fma(load(dcv, c * dc_idx.shape[1] + j), load(z, dc_idx[c, j]), x)
             if nonlinear:
                 for b in range(lanes):
-                    x = fc[c, b] - r_in[s, c, b]
-                    fc[c, b] = contact_table_force(table[s, c, b], y_start[b], y_step[b], x)
+                    y = x[b] - r_in[s, c, b]
+                    fc[c, b] = contact_table_force(table[s, c, b], y_start[b], y_step[b], y)
                     fc[c, b] -= static_load[b]
             else:
-                for b in range(lanes):
-                    fc[c, b] = k_in[s, c, b] * (fc[c, b] - r_in[s, c, b])
+                store(fc, c, _spring(load(kv, s * nc + c), load(rv, s * nc + c), x))
         # q1 without the wedge forces
         for i in range(n):
-            for b in range(lanes):
-                q1[i, b] = 0.0
+            acc = zero
             for j in range(p_idx.shape[1]):
-                col = p_idx[i, j]
-                for b in range(lanes):
-                    q1[i, b] += p_val[i, j, b] * z[col, b]
+                acc = _fma(load(pv, i * p_idx.shape[1] + j), load(z, p_idx[i, j]), acc)
+            store(q1, i, acc)
         for c in range(nc):
+            f = load(fc, c)
             for j in range(gc_idx.shape[1]):
                 row = gc_idx[c, j]
-                for b in range(lanes):
-                    q1[row, b] -= gc_val[c, j, b] * fc[c, b]
+                store(q1, row, _fms(load(gcv, c * gc_idx.shape[1] + j), f, load(q1, row)))
         if nw > 0:
             # the wedges: free velocities and slip forces (`wedge_step`), then Newton
             for w in range(nw):
-                for b in range(lanes):
-                    f_up[w, b] = 0.0  # here the displacement across the wedge
-                    vfree[w, b] = 0.0
+                d, vv = zero, zero
                 for j in range(dw_idx.shape[1]):
                     col = dw_idx[w, j]
-                    for b in range(lanes):
-                        f_up[w, b] += dw_val[w, j, b] * z[col, b]
-                        vfree[w, b] += dw_val[w, j, b] * (q1[col, b] - z[n + col, b])
-                for b in range(lanes):
-                    vfree[w, b] *= inv2dt[b]
-                    normal = wedge[w, 0, b] + f_up[w, b]
-                    normal = 0.0 if normal < 0.0 else normal
-                    f_up[w, b] = normal * wedge[w, 1, b]
-                    f_down[w, b] = normal * wedge[w, 2, b]
-            for b in range(lanes):
-                changed[b] = 1
+                    a = load(dwv, w * dw_idx.shape[1] + j)
+                    d = _fma(a, load(z, col), d)
+                    vv = _fma_difference(a, vv, load(q1, col), load(z, n + col))
+                store(vfree, w, _product(vv, half))
+                normal = _normal(d, load(wv, 4 * w))
+                store(f_up, w, _product(normal, load(wv, 4 * w + 1)))
+                store(f_down, w, _product(normal, load(wv, 4 * w + 2)))
+            going = load(run, 0)
+            ch, pending = every, 1  # as if every lane's states changed
             for _ in range(max_iter):
-                for b in range(lanes):
-                    mask[b] = 0
+                m = none
                 for w in range(nw):
-                    for b in range(lanes):
-                        st = state[w, b]
-                        F[w, b] = 0.0 if st == 0 else (f_up[w, b] if st == 1 else -f_down[w, b])
-                        mask[b] += (1 << w) if st == 0 else 0
+                    st = load(state, w)
+                    store(F, w, _slip_force(load(f_down, w), st, load(f_up, w)))
+                    m = _stick_bit(m, st, 1 << w)
+                store(mask, 0, m)
                 for w in range(nw):
-                    for b in range(lanes):
-                        rhs[w, b] = vfree[w, b]
+                    r = load(vfree, w)
                     for u in range(nw):
-                        for b in range(lanes):
-                            rhs[w, b] -= H[w, u, b] * F[u, b]
-                for b in range(lanes):
-                    changed[b] = 0
-                    if held[b] != mask[b]:  # the lane's inverse, where the loop reads it
-                        held[b] = mask[b]
-                        for w in range(nw):
-                            for u in range(nw):
-                                jl[w, u, b] = jinv[mask[b], w, u, b]
+                        r = _fms(load(hv, w * nw + u), load(F, u), r)
+                    store(rhs, w, r)
+                if total(_differ(load(held, 0), m)) > 0:
+                    for b in range(lanes):  # the lane's inverse, where the loop reads it
+                        if held[0, b] != mask[0, b]:
+                            held[0, b] = mask[0, b]
+                            for w in range(nw):
+                                for u in range(nw):
+                                    jl[w * nw + u, b] = jinv[mask[0, b], w, u, b]
+                ch = none
                 for w in range(nw):
-                    for b in range(lanes):
-                        v[w, b] = 0.0
+                    acc = zero
                     for u in range(nw):
-                        for b in range(lanes):
-                            v[w, b] += jl[w, u, b] * rhs[u, b]
-                    for b in range(lanes):
-                        f = wedge[w, 3, b] * v[w, b]
-                        new = 1 if f > f_up[w, b] else (2 if f < -f_down[w, b] else 0)
-                        changed[b] |= new != state[w, b]
-                        state[w, b] = new
-                pending = 0
-                for b in range(lanes):
-                    pending += changed[b] if run[b] else 0
+                        acc = _fma(load(jl, w * nw + u), load(rhs, u), acc)
+                    store(v, w, acc)
+                    st = load(state, w)
+                    new = _new_state(load(wv, 4 * w + 3), load(f_down, w), load(f_up, w), acc)
+                    ch = _changed(ch, new, st)
+                    store(state, w, new)
+                pending = total(_pending(going, ch))
                 if pending == 0:
                     break
-            for b in range(lanes):
-                if run[b] and changed[b]:
-                    status[b, 0], status[b, 1] = NEWTON_FAILED, s
-                    run[b] = False
-            for w in range(nw):
+            if pending > 0:
                 for b in range(lanes):
-                    F[w, b] = wedge[w, 3, b] * v[w, b] if state[w, b] == 0 else F[w, b]
+                    if run[0, b] and ch[b]:
+                        status[b, 0], status[b, 1] = NEWTON_FAILED, s
+                        run[0, b] = False
+            for w in range(nw):
+                f = _stick_force(load(wv, 4 * w + 3), load(F, w), load(state, w), load(v, w))
+                store(F, w, f)
                 for j in range(gw_idx.shape[1]):
                     row = gw_idx[w, j]
-                    for b in range(lanes):
-                        q1[row, b] -= gw_val[w, j, b] * F[w, b]
-        for b in range(lanes):
-            if run[b] and to_store[b] == 0:
-                to_store[b] = store_every[b]
-                for i in range(n):
+                    store(q1, row, _fms(load(gwv, w * gw_idx.shape[1] + j), f, load(q1, row)))
+        for b in range(lanes if s == next_due else 0):
+            if due[b] == s:
+                due[b] += store_every[b]
+                for i in range(n if run[0, b] else 0):
                     if z_bits[i, b] & _EXPONENT == _EXPONENT:
                         status[b, 0], status[b, 1] = NOT_FINITE, s
-                        run[b] = False
-                if not run[b]:
+                        run[0, b] = False
+                if not run[0, b]:
                     continue
                 row = row0[b] + stored[b]
                 for i in range(n):
@@ -447,10 +455,10 @@ def advance_lanes(
                     out_v[row, i] = (q1[i, b] - z[n + i, b]) * inv2dt[b]
                     out_a[row, i] = (q1[i, b] - 2.0 * z[i, b] + z[n + i, b]) * invdt2[b]
                 for u in range(ds_idx.shape[0]):
-                    d = 0.0
+                    sec = 0.0
                     for j in range(ds_idx.shape[1]):
-                        d += ds_val[u, j, b] * z[ds_idx[u, j], b]
-                    out_secondary[row, u] = d
+                        sec += ds_val[u, j, b] * z[ds_idx[u, j], b]
+                    out_secondary[row, u] = sec
                 for w in range(nw):
                     out_fw[row, w] = F[w, b]
                     out_vw[row, w] = v[w, b]
@@ -464,11 +472,13 @@ def advance_lanes(
                     out_k[row, c] = k_in[s, c, b]
                     out_r[row, c] = r_in[s, c, b]
                 stored[b] += 1
-            to_store[b] -= 1
+        if s == next_due:
+            next_due = due.min()
+        going = load(run, 0)
         for i in range(n):
-            for b in range(lanes):
-                z[n + i, b] = z[i, b] if run[b] else z[n + i, b]
-                z[i, b] = q1[i, b] if run[b] else z[i, b]
+            zi = load(z, i)
+            store(z, n + i, _select(going, zi, load(z, n + i)))
+            store(z, i, _select(going, load(q1, i), zi))
 
 
 @njit(cache=True, parallel=True, nogil=True)
@@ -721,11 +731,12 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> 
         (k, r, table, count), (k1, r1, table1, in_start) = sampled
         row0 = rows[:-1] + (first + per_run["every"] - 1) // per_run["every"]
         if n_groups:  # mypy cannot match star-args to a compiled function's arity
-            advance_groups(  # type: ignore[call-arg]
-                *lane_mats, lane["static"], k, r, table, lane["y_start"], lane["y_step"],
-                count, lane_z, lane["dt"], first, lane["every"], newton_max_iter,
-                in_lanes(row0, take), *flat.values(), lane_status,
-            )  # fmt: skip
+            with vectorised():
+                advance_groups(  # type: ignore[call-arg]
+                    *lane_mats, lane["static"], k, r, table, lane["y_start"], lane["y_step"],
+                    count, lane_z, lane["dt"], first, lane["every"], newton_max_iter,
+                    in_lanes(row0, take), *flat.values(), lane_status,
+                )  # fmt: skip
         if in_groups < runs:
             advance_runs(  # type: ignore[call-arg]
                 *run_mats, per_run["static"][one], k1, r1, table1, per_run["y_start"][one],

@@ -1,0 +1,82 @@
+"""Operations on the runs of a group of the vector lanes, as tuples of `LANES` values.
+
+`trackdyn.solver.central.advance_lanes` holds each quantity of a step (a displacement, a
+contact force, a wedge's state) of its `LANES` runs as one tuple: read from a row of a
+(rows, `LANES`) array with `load`, combined by functions made with `lanewise`, written
+back with `store`. A tuple's values are values, not memory: each operation reads all its
+operands before anything is written, so LLVM's SLP vectoriser packs the lanes into vector
+registers. Written as loops over the lanes on arrays instead, a lane's loads cannot be
+moved past the previous lane's stores (numba gives LLVM no way to know that two arrays do
+not overlap), and the step stays scalar.
+
+The SLP vectoriser is off in numba by default (``NUMBA_SLP_VECTORIZE``); `vectorised`
+turns it on while a loop is compiled.
+"""
+
+from __future__ import annotations
+
+import re
+from contextlib import contextmanager
+
+import numba
+from numba import njit
+
+LANES = 8
+"""Runs of one model in a group of the vector lanes: a compile-time constant, so that an
+operation on a group is a fixed number of instructions (8 doubles fill an AVX-512
+register). Fewer runs than this go one by one: a group costs as much with fewer lanes
+filled."""
+
+FASTMATH = {"nnan", "ninf", "nsz", "contract", "afn"}
+"""LLVM's fast-math flags of the loops: all but reassociation, so that a run's sums are
+done in the same order alone and in the lanes (the same results, to the bit)."""
+
+_OPERAND = re.compile(r"\b([a-z])\b")
+
+
+def _compiled(source: str):
+    """The numba function (inlined into its callers) defined by ``source``."""
+    namespace: dict = {}
+    exec(source, namespace)  # noqa: S102 - the source is built in this module only
+    (function,) = (v for k, v in namespace.items() if not k.startswith("__"))
+    return njit(inline="always", fastmath=FASTMATH, error_model="numpy")(function)
+
+
+def lanewise(expression: str):
+    """A numba function applying the scalar ``expression`` in every lane.
+
+    Its one-letter lower-case names are the operands, tuples of `LANES` values, passed in
+    alphabetical order; upper-case names are scalars, the same in every lane, passed after
+    them (``lanewise("c + a * b")(a, b, c)``; ``lanewise("m + (K if s == 0 else 0)")(m, s,
+    K)``). The result is a tuple of `LANES` values.
+    """
+    lanes = sorted(set(_OPERAND.findall(expression)))
+    scalars = sorted(set(re.findall(r"\b([A-Z])\b", expression)))
+    terms = ", ".join(_OPERAND.sub(rf"\1[{b}]", expression) for b in range(LANES))
+    return _compiled(f"def lanewise({', '.join(lanes + scalars)}):\n    return ({terms},)\n")
+
+
+load = _compiled(
+    "def load(a, r):\n    return (" + ", ".join(f"a[r, {b}]" for b in range(LANES)) + ",)\n"
+)
+"""``load(a, r)``: row ``r`` of the (rows, `LANES`) array ``a`` as a tuple."""
+
+store = _compiled(
+    "def store(a, r, t):\n" + "".join(f"    a[r, {b}] = t[{b}]\n" for b in range(LANES))
+)
+"""``store(a, r, t)``: the tuple ``t`` into row ``r`` of the (rows, `LANES`) array ``a``."""
+
+total = _compiled("def total(t):\n    return " + " + ".join(f"t[{b}]" for b in range(LANES)) + "\n")
+"""``total(t)``: the sum of the lanes' values of the tuple ``t``."""
+
+
+@contextmanager
+def vectorised():
+    """numba compiles with LLVM's SLP vectoriser inside this context (the loops over the
+    lanes' tuples are compiled at their first call, or loaded from numba's cache)."""
+    before = numba.config.SLP_VECTORIZE
+    numba.config.SLP_VECTORIZE = 1
+    try:
+        yield
+    finally:
+        numba.config.SLP_VECTORIZE = before
