@@ -286,9 +286,9 @@ _fma_difference = lanewise("c + a * (p - q)")
 _product = lanewise("a * b")
 _spring = lanewise("k * (x - r)")
 _normal = lanewise("0.0 if d + o < 0.0 else d + o")
-_slip_force = lanewise("0.0 if s == 0 else (u if s == 1 else -d)")
+_slip_force = lanewise("(s == 1) * u - (s == 2) * d")
 _stick_bit = lanewise("m + (K if s == 0 else 0)")
-_new_state = lanewise("1 if c * v > u else (2 if c * v < -d else 0)")
+_new_state = lanewise("(c * v > u) + 2 * ((c * v < -d) & (c * v <= u))")
 _changed = lanewise("h | (1 if n != s else 0)")
 _stick_force = lanewise("c * v if s == 0 else f")
 _select = lanewise("x if g else y")
@@ -325,29 +325,29 @@ def advance_lanes(
     nw = dw_idx.shape[0]
     lanes = LANES
     nonlinear = table.shape[0] > 0
-    # one row of the lanes per value
-    pv, gcv, gwv = p_val.reshape(-1, lanes), gc_val.reshape(-1, lanes), gw_val.reshape(-1, lanes)
-    dcv, dwv, hv = dc_val.reshape(-1, lanes), dw_val.reshape(-1, lanes), H.reshape(-1, lanes)
-    wv, kv, rv = wedge.reshape(-1, lanes), k_in.reshape(-1, lanes), r_in.reshape(-1, lanes)
+    # flat, one row of `LANES` values after the other (`load`, `store`)
+    pv, gcv, gwv = p_val.reshape(-1), gc_val.reshape(-1), gw_val.reshape(-1)
+    dcv, dwv, hv = dc_val.reshape(-1), dw_val.reshape(-1), H.reshape(-1)
+    wv, kv, rv, zl = wedge.reshape(-1), k_in.reshape(-1), r_in.reshape(-1), z.reshape(-1)
     inv2dt = 0.5 / dt
     invdt2 = 1.0 / (dt * dt)
-    half = load(inv2dt.reshape(1, lanes), 0)
-    zero = load(np.zeros((1, lanes)), 0)
-    none = load(np.zeros((1, lanes), np.int64), 0)
-    every = load(np.ones((1, lanes), np.int64), 0)
-    q1 = np.empty((n, lanes))
-    fc = np.empty((nc, lanes))
-    vfree = np.empty((nw, lanes))
-    rhs = np.empty((nw, lanes))
-    v = np.zeros((nw, lanes))
-    f_up = np.empty((nw, lanes))
-    f_down = np.empty((nw, lanes))
-    F = np.zeros((nw, lanes))
-    state = np.zeros((nw, lanes), np.int64)  # 0 stick, 1 slip in compression, 2 in extension
-    mask = np.empty((1, lanes), np.int64)
-    jl = np.empty((nw * nw, lanes))  # the inverse of each lane's stick/slip states `held`
-    held = np.full((1, lanes), -1, np.int64)
-    run = np.empty((1, lanes), np.bool_)
+    half = load(inv2dt, 0)
+    zero = load(np.zeros(lanes), 0)
+    none = load(np.zeros(lanes, np.int64), 0)
+    every = load(np.ones(lanes, np.int64), 0)
+    q1 = np.empty(n * lanes)
+    fc = np.empty(nc * lanes)
+    vfree = np.empty(nw * lanes)
+    rhs = np.empty(nw * lanes)
+    v = np.zeros(nw * lanes)
+    f_up = np.empty(nw * lanes)
+    f_down = np.empty(nw * lanes)
+    F = np.zeros(nw * lanes)
+    state = np.zeros(nw * lanes, np.int64)  # 0 stick, 1 slip in compression, 2 in extension
+    mask = np.empty(lanes, np.int64)
+    jl = np.empty(nw * nw * lanes)  # the inverse of each lane's stick/slip states `held`
+    held = np.full(lanes, -1, np.int64)
+    run = np.empty(lanes, np.bool_)
     stored = np.zeros(lanes, np.int64)
     due = -step0 % store_every  # each lane's next stored step
     next_due = due.min()
@@ -358,24 +358,26 @@ def advance_lanes(
         if s == next_end:
             next_end = steps
             for b in range(lanes):
-                run[0, b] = status[b, 0] == DONE and s < count[b]
+                run[b] = status[b, 0] == DONE and s < count[b]
                 next_end = min(next_end, count[b]) if count[b] > s else next_end
         for c in range(nc):
             x = zero
             for j in range(dc_idx.shape[1]):
-                x = _fma(load(dcv, c * dc_idx.shape[1] + j), load(z, dc_idx[c, j]), x)
+                x = _fma(load(dcv, c * dc_idx.shape[1] + j), load(zl, dc_idx[c, j]), x)
             if nonlinear:
                 for b in range(lanes):
                     y = x[b] - r_in[s, c, b]
-                    fc[c, b] = contact_table_force(table[s, c, b], y_start[b], y_step[b], y)
-                    fc[c, b] -= static_load[b]
+                    fc[c * lanes + b] = contact_table_force(
+                        table[s, c, b], y_start[b], y_step[b], y
+                    )
+                    fc[c * lanes + b] -= static_load[b]
             else:
                 store(fc, c, _spring(load(kv, s * nc + c), load(rv, s * nc + c), x))
         # q1 without the wedge forces
         for i in range(n):
             acc = zero
             for j in range(p_idx.shape[1]):
-                acc = _fma(load(pv, i * p_idx.shape[1] + j), load(z, p_idx[i, j]), acc)
+                acc = _fma(load(pv, i * p_idx.shape[1] + j), load(zl, p_idx[i, j]), acc)
             store(q1, i, acc)
         for c in range(nc):
             f = load(fc, c)
@@ -389,8 +391,8 @@ def advance_lanes(
                 for j in range(dw_idx.shape[1]):
                     col = dw_idx[w, j]
                     a = load(dwv, w * dw_idx.shape[1] + j)
-                    d = _fma(a, load(z, col), d)
-                    vv = _fma_difference(a, vv, load(q1, col), load(z, n + col))
+                    d = _fma(a, load(zl, col), d)
+                    vv = _fma_difference(a, vv, load(q1, col), load(zl, n + col))
                 store(vfree, w, _product(vv, half))
                 normal = _normal(d, load(wv, 4 * w))
                 store(f_up, w, _product(normal, load(wv, 4 * w + 1)))
@@ -411,11 +413,11 @@ def advance_lanes(
                     store(rhs, w, r)
                 if total(_differ(load(held, 0), m)) > 0:
                     for b in range(lanes):  # the lane's inverse, where the loop reads it
-                        if held[0, b] != mask[0, b]:
-                            held[0, b] = mask[0, b]
+                        if held[b] != mask[b]:
+                            held[b] = mask[b]
                             for w in range(nw):
                                 for u in range(nw):
-                                    jl[w * nw + u, b] = jinv[mask[0, b], w, u, b]
+                                    jl[(w * nw + u) * lanes + b] = jinv[mask[b], w, u, b]
                 ch = none
                 for w in range(nw):
                     acc = zero
@@ -431,9 +433,9 @@ def advance_lanes(
                     break
             if pending > 0:
                 for b in range(lanes):
-                    if run[0, b] and ch[b]:
+                    if run[b] and ch[b]:
                         status[b, 0], status[b, 1] = NEWTON_FAILED, s
-                        run[0, b] = False
+                        run[b] = False
             for w in range(nw):
                 f = _stick_force(load(wv, 4 * w + 3), load(F, w), load(state, w), load(v, w))
                 store(F, w, f)
@@ -443,31 +445,32 @@ def advance_lanes(
         for b in range(lanes if s == next_due else 0):
             if due[b] == s:
                 due[b] += store_every[b]
-                for i in range(n if run[0, b] else 0):
+                for i in range(n if run[b] else 0):
                     if z_bits[i, b] & _EXPONENT == _EXPONENT:
                         status[b, 0], status[b, 1] = NOT_FINITE, s
-                        run[0, b] = False
-                if not run[0, b]:
+                        run[b] = False
+                if not run[b]:
                     continue
                 row = row0[b] + stored[b]
                 for i in range(n):
                     out_q[row, i] = z[i, b]
-                    out_v[row, i] = (q1[i, b] - z[n + i, b]) * inv2dt[b]
-                    out_a[row, i] = (q1[i, b] - 2.0 * z[i, b] + z[n + i, b]) * invdt2[b]
+                    out_v[row, i] = (q1[i * lanes + b] - z[n + i, b]) * inv2dt[b]
+                    out_a[row, i] = (q1[i * lanes + b] - 2.0 * z[i, b] + z[n + i, b]) * invdt2[b]
                 for u in range(ds_idx.shape[0]):
                     sec = 0.0
                     for j in range(ds_idx.shape[1]):
                         sec += ds_val[u, j, b] * z[ds_idx[u, j], b]
                     out_secondary[row, u] = sec
                 for w in range(nw):
-                    out_fw[row, w] = F[w, b]
-                    out_vw[row, w] = v[w, b]
+                    out_fw[row, w] = F[w * lanes + b]
+                    out_vw[row, w] = v[w * lanes + b]
                 for c in range(nc):
                     dv = 0.0
                     for j in range(dc_idx.shape[1]):
                         dv += dc_val[c, j, b] * out_v[row, dc_idx[c, j]]
                     out_wl[row, c] = (
-                        static_load[b] + (fc[c, b] + contact[c, 0, b] * dv) / contact[c, 1, b]
+                        static_load[b]
+                        + (fc[c * lanes + b] + contact[c, 0, b] * dv) / contact[c, 1, b]
                     )
                     out_k[row, c] = k_in[s, c, b]
                     out_r[row, c] = r_in[s, c, b]
@@ -476,9 +479,9 @@ def advance_lanes(
             next_due = due.min()
         going = load(run, 0)
         for i in range(n):
-            zi = load(z, i)
-            store(z, n + i, _select(going, zi, load(z, n + i)))
-            store(z, i, _select(going, load(q1, i), zi))
+            zi = load(zl, i)
+            store(zl, n + i, _select(going, zi, load(zl, n + i)))
+            store(zl, i, _select(going, load(q1, i), zi))
 
 
 @njit(cache=True, parallel=True, nogil=True)

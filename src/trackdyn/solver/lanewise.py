@@ -1,13 +1,14 @@
 """Operations on the runs of a group of the vector lanes, as tuples of `LANES` values.
 
 `trackdyn.solver.central.advance_lanes` holds each quantity of a step (a displacement, a
-contact force, a wedge's state) of its `LANES` runs as one tuple: read from a row of a
-(rows, `LANES`) array with `load`, combined by functions made with `lanewise`, written
-back with `store`. A tuple's values are values, not memory: each operation reads all its
-operands before anything is written, so LLVM's SLP vectoriser packs the lanes into vector
-registers. Written as loops over the lanes on arrays instead, a lane's loads cannot be
-moved past the previous lane's stores (numba gives LLVM no way to know that two arrays do
-not overlap), and the step stays scalar.
+contact force, a wedge's state) of its `LANES` runs as one tuple: read with `load` from a
+flat array, one row of `LANES` values after the other, combined by functions made with
+`lanewise`, written back with `store`. A tuple's values are values, not memory: each
+operation reads all its operands before anything is written, so LLVM's SLP vectoriser
+packs the lanes into vector registers. Written as loops over the lanes on arrays instead,
+a lane's loads cannot be moved past the previous lane's stores (numba gives LLVM no way to
+know that two arrays do not overlap), and the step stays scalar. Conditions are written
+as arithmetic where a nested ``if``-expression would compile to branches, lane by lane.
 
 The SLP vectoriser is off in numba by default (``NUMBA_SLP_VECTORIZE``); `vectorised`
 turns it on while a loop is compiled.
@@ -19,6 +20,7 @@ import re
 from contextlib import contextmanager
 
 import numba
+import numpy as np
 from numba import njit
 
 LANES = 8
@@ -36,9 +38,9 @@ _OPERAND = re.compile(r"\b([a-z])\b")
 
 def _compiled(source: str):
     """The numba function (inlined into its callers) defined by ``source``."""
-    namespace: dict = {}
+    namespace: dict = {"np": np, "LANES": LANES}
     exec(source, namespace)  # noqa: S102 - the source is built in this module only
-    (function,) = (v for k, v in namespace.items() if not k.startswith("__"))
+    (function,) = (v for k, v in namespace.items() if k not in ("np", "LANES", "__builtins__"))
     return njit(inline="always", fastmath=FASTMATH, error_model="numpy")(function)
 
 
@@ -57,14 +59,19 @@ def lanewise(expression: str):
 
 
 load = _compiled(
-    "def load(a, r):\n    return (" + ", ".join(f"a[r, {b}]" for b in range(LANES)) + ",)\n"
+    "def load(a, r):\n    k = np.uint64(r) * np.uint64(LANES)\n    return ("
+    + ", ".join(f"a[k + np.uint64({b})]" for b in range(LANES))
+    + ",)\n"
 )
-"""``load(a, r)``: row ``r`` of the (rows, `LANES`) array ``a`` as a tuple."""
+"""``load(a, r)``: row ``r`` of the flat array ``a`` of rows of `LANES` values, as a
+tuple. ``r`` is not negative: taken unsigned, it is used without numba's check for
+indices from the end, and a flat array's rows without a multiplication by its width."""
 
 store = _compiled(
-    "def store(a, r, t):\n" + "".join(f"    a[r, {b}] = t[{b}]\n" for b in range(LANES))
+    "def store(a, r, t):\n    k = np.uint64(r) * np.uint64(LANES)\n"
+    + "".join(f"    a[k + np.uint64({b})] = t[{b}]\n" for b in range(LANES))
 )
-"""``store(a, r, t)``: the tuple ``t`` into row ``r`` of the (rows, `LANES`) array ``a``."""
+"""``store(a, r, t)``: the tuple ``t`` into row ``r`` of the flat array ``a`` (`load`)."""
 
 total = _compiled("def total(t):\n    return " + " + ".join(f"t[{b}]" for b in range(LANES)) + "\n")
 """``total(t)``: the sum of the lanes' values of the tuple ``t``."""
