@@ -293,6 +293,10 @@ _changed = lanewise("h | (1 if n != s else 0)")
 _stick_force = lanewise("c * v if s == 0 else f")
 _select = lanewise("x if g else y")
 _differ = lanewise("1 if h != m else 0")
+_not_finite = lanewise("f | (1 if y & E == E else 0)")
+_velocity = lanewise("(q - p) * h")
+_acceleration = lanewise("(q - 2.0 * z + p) * h")
+_wheel_load = lanewise("l + (f + a * d) / x")
 _pending = lanewise("h if g else 0")
 """Operations of `advance_lanes` on the tuples of its lanes (`lanewise`): each the
 expression written in `advance` or `wedge_step`, in every lane."""
@@ -329,13 +333,16 @@ def advance_lanes(
     pv, gcv, gwv = p_val.reshape(-1), gc_val.reshape(-1), gw_val.reshape(-1)
     dcv, dwv, hv = dc_val.reshape(-1), dw_val.reshape(-1), H.reshape(-1)
     wv, kv, rv, zl = wedge.reshape(-1), k_in.reshape(-1), r_in.reshape(-1), z.reshape(-1)
+    dsv, cv, zb = ds_val.reshape(-1), contact.reshape(-1), z.view(np.int64).reshape(-1)
     inv2dt = 0.5 / dt
     invdt2 = 1.0 / (dt * dt)
-    half = load(inv2dt, 0)
+    half, per_dt2, static = load(inv2dt, 0), load(invdt2, 0), load(static_load, 0)
     zero = load(np.zeros(lanes), 0)
     none = load(np.zeros(lanes, np.int64), 0)
     every = load(np.ones(lanes, np.int64), 0)
     q1 = np.empty(n * lanes)
+    out_v_l, out_a_l = np.empty(n * lanes), np.empty(n * lanes)  # the stored steps' rows
+    out_sec_l, out_wl_l = np.empty(ds_idx.shape[0] * lanes), np.empty(nc * lanes)
     fc = np.empty(nc * lanes)
     vfree = np.empty(nw * lanes)
     rhs = np.empty(nw * lanes)
@@ -353,7 +360,6 @@ def advance_lanes(
     next_due = due.min()
     steps = count.max()
     next_end = 0  # the next step at which a lane's run may end
-    z_bits = z.view(np.int64)
     for s in range(steps):
         if s == next_end:
             next_end = steps
@@ -442,40 +448,49 @@ def advance_lanes(
                 for j in range(gw_idx.shape[1]):
                     row = gw_idx[w, j]
                     store(q1, row, _fms(load(gwv, w * gw_idx.shape[1] + j), f, load(q1, row)))
-        for b in range(lanes if s == next_due else 0):
-            if due[b] == s:
+        if s == next_due:
+            # what `store_vehicle` writes, each a row of the lanes
+            bad = none
+            for i in range(n):
+                zi, zp, qi = load(zl, i), load(zl, n + i), load(q1, i)
+                bad = _not_finite(bad, load(zb, i), _EXPONENT)
+                store(out_v_l, i, _velocity(half, zp, qi))
+                store(out_a_l, i, _acceleration(per_dt2, zp, qi, zi))
+            for u in range(ds_idx.shape[0]):
+                acc = zero
+                for j in range(ds_idx.shape[1]):
+                    acc = _fma(load(dsv, u * ds_idx.shape[1] + j), load(zl, ds_idx[u, j]), acc)
+                store(out_sec_l, u, acc)
+            for c in range(nc):
+                dv = zero
+                for j in range(dc_idx.shape[1]):
+                    dv = _fma(load(dcv, c * dc_idx.shape[1] + j), load(out_v_l, dc_idx[c, j]), dv)
+                wl = _wheel_load(load(cv, 2 * c), dv, load(fc, c), static, load(cv, 2 * c + 1))
+                store(out_wl_l, c, wl)
+            for b in range(lanes):
+                if due[b] != s:
+                    continue
                 due[b] += store_every[b]
-                for i in range(n if run[b] else 0):
-                    if z_bits[i, b] & _EXPONENT == _EXPONENT:
-                        status[b, 0], status[b, 1] = NOT_FINITE, s
-                        run[b] = False
+                if run[b] and bad[b]:
+                    status[b, 0], status[b, 1] = NOT_FINITE, s
+                    run[b] = False
                 if not run[b]:
                     continue
                 row = row0[b] + stored[b]
                 for i in range(n):
                     out_q[row, i] = z[i, b]
-                    out_v[row, i] = (q1[i * lanes + b] - z[n + i, b]) * inv2dt[b]
-                    out_a[row, i] = (q1[i * lanes + b] - 2.0 * z[i, b] + z[n + i, b]) * invdt2[b]
+                    out_v[row, i] = out_v_l[i * lanes + b]
+                    out_a[row, i] = out_a_l[i * lanes + b]
                 for u in range(ds_idx.shape[0]):
-                    sec = 0.0
-                    for j in range(ds_idx.shape[1]):
-                        sec += ds_val[u, j, b] * z[ds_idx[u, j], b]
-                    out_secondary[row, u] = sec
+                    out_secondary[row, u] = out_sec_l[u * lanes + b]
                 for w in range(nw):
                     out_fw[row, w] = F[w * lanes + b]
                     out_vw[row, w] = v[w * lanes + b]
                 for c in range(nc):
-                    dv = 0.0
-                    for j in range(dc_idx.shape[1]):
-                        dv += dc_val[c, j, b] * out_v[row, dc_idx[c, j]]
-                    out_wl[row, c] = (
-                        static_load[b]
-                        + (fc[c * lanes + b] + contact[c, 0, b] * dv) / contact[c, 1, b]
-                    )
+                    out_wl[row, c] = out_wl_l[c * lanes + b]
                     out_k[row, c] = k_in[s, c, b]
                     out_r[row, c] = r_in[s, c, b]
                 stored[b] += 1
-        if s == next_due:
             next_due = due.min()
         going = load(run, 0)
         for i in range(n):
