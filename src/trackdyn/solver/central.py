@@ -70,6 +70,11 @@ CHUNK_BYTES = 32 * 2**20
 """Memory of a block's sampled track input, all runs of a batch together, at most [B]
 (a batch's block is shortened to fit; the nonlinear contacts' tables take most)."""
 
+STAGED = 128
+"""Stored steps of each run in the lanes held before they are written to its outputs
+(`advance_lanes`): a run's rows are then written one block after the other, not one row
+of each of the lanes' outputs after the other."""
+
 DONE, NEWTON_FAILED, NOT_FINITE, NOT_STARTED = 0, 1, 2, 3
 """How `advance` ends: all steps done; no Newton solution at a step; a stored
 displacement not finite. `advance_lanes` leaves runs in any state but `DONE` alone
@@ -280,6 +285,17 @@ def advance(
     return DONE, -1
 
 
+@njit(cache=True, inline="always")
+def _write_staged(b, first, count, outs, stages):
+    """Write lane ``b``'s ``count`` staged steps to the rows from ``first`` on of the
+    outputs ``outs``: each from its stage (lanes, `STAGED`, width) in ``stages``."""
+    for a in range(len(outs)):
+        out, stage = outs[a], stages[a]
+        for k in range(count):
+            for i in range(out.shape[1]):
+                out[first + k, i] = stage[b, k, i]
+
+
 _fma = lanewise("c + a * b")
 _fms = lanewise("c - a * b")
 _fma_difference = lanewise("c + a * (p - q)")
@@ -343,6 +359,16 @@ def advance_lanes(
     q1 = np.empty(n * lanes)
     out_v_l, out_a_l = np.empty(n * lanes), np.empty(n * lanes)  # the stored steps' rows
     out_sec_l, out_wl_l = np.empty(ds_idx.shape[0] * lanes), np.empty(nc * lanes)
+    # each lane's stored steps, written to the outputs `STAGED` at a time
+    by_dof, by_wedge = np.empty((3, lanes, STAGED, n)), np.empty((2, lanes, STAGED, nw))
+    by_contact = np.empty((3, lanes, STAGED, nc))
+    stage_q, stage_v, stage_a = by_dof[0], by_dof[1], by_dof[2]
+    stage_sec = np.empty((lanes, STAGED, ds_idx.shape[0]))
+    stage_fw, stage_vw = by_wedge[0], by_wedge[1]
+    stage_wl, stage_k, stage_r = by_contact[0], by_contact[1], by_contact[2]
+    outs = (out_q, out_v, out_a, out_wl, out_secondary, out_fw, out_vw, out_k, out_r)
+    stages = (stage_q, stage_v, stage_a, stage_wl, stage_sec, stage_fw, stage_vw, stage_k, stage_r)
+    staged = np.zeros(lanes, np.int64)
     fc = np.empty(nc * lanes)
     vfree = np.empty(nw * lanes)
     rhs = np.empty(nw * lanes)
@@ -476,27 +502,33 @@ def advance_lanes(
                     run[b] = False
                 if not run[b]:
                     continue
-                row = row0[b] + stored[b]
+                k = staged[b]
                 for i in range(n):
-                    out_q[row, i] = z[i, b]
-                    out_v[row, i] = out_v_l[i * lanes + b]
-                    out_a[row, i] = out_a_l[i * lanes + b]
+                    stage_q[b, k, i] = z[i, b]
+                    stage_v[b, k, i] = out_v_l[i * lanes + b]
+                    stage_a[b, k, i] = out_a_l[i * lanes + b]
                 for u in range(ds_idx.shape[0]):
-                    out_secondary[row, u] = out_sec_l[u * lanes + b]
+                    stage_sec[b, k, u] = out_sec_l[u * lanes + b]
                 for w in range(nw):
-                    out_fw[row, w] = F[w * lanes + b]
-                    out_vw[row, w] = v[w * lanes + b]
+                    stage_fw[b, k, w] = F[w * lanes + b]
+                    stage_vw[b, k, w] = v[w * lanes + b]
                 for c in range(nc):
-                    out_wl[row, c] = out_wl_l[c * lanes + b]
-                    out_k[row, c] = k_in[s, c, b]
-                    out_r[row, c] = r_in[s, c, b]
+                    stage_wl[b, k, c] = out_wl_l[c * lanes + b]
+                    stage_k[b, k, c] = k_in[s, c, b]
+                    stage_r[b, k, c] = r_in[s, c, b]
                 stored[b] += 1
+                staged[b] += 1
+                if staged[b] == STAGED:
+                    _write_staged(b, row0[b] + stored[b] - staged[b], staged[b], outs, stages)
+                    staged[b] = 0
             next_due = due.min()
         going = load(run, 0)
         for i in range(n):
             zi = load(zl, i)
             store(zl, n + i, _select(going, zi, load(zl, n + i)))
             store(zl, i, _select(going, load(q1, i), zi))
+    for b in range(lanes):
+        _write_staged(b, row0[b] + stored[b] - staged[b], staged[b], outs, stages)
 
 
 @njit(cache=True, parallel=True, nogil=True)
