@@ -7,10 +7,12 @@ The batches here hold a group and a run left over, which goes one by one.
 """
 
 import copy
+from contextlib import contextmanager
 
 import numpy as np
 import pytest
 
+from trackdyn import simulation
 from trackdyn.errors import TrackdynInputError
 from trackdyn.options import RunOptions
 from trackdyn.simulation import run_batch
@@ -105,3 +107,24 @@ def test_a_non_finite_lane_stops_alone(lin, monkeypatch):
         assert isinstance(r, TrackdynInputError) == (i == 1)
     assert "non-finite displacements" in str(batch[1])
     assert_alone(batch, vehicles, tracks, options)
+
+
+@pytest.mark.parametrize("runs", [1, 3, central.LANES + 1])
+def test_progress_counts_every_step(lin, monkeypatch, runs):
+    # the bar gets every step of every run, in the lanes and one by one (a run alone once
+    # counted none of its steps)
+    seen = {}
+
+    class Bar:
+        def advance(self, n):
+            seen["done"] = seen.get("done", 0) + n
+
+    @contextmanager
+    def bar(show, total, label):
+        seen["total"] = total
+        yield Bar()
+
+    monkeypatch.setattr(simulation, "progress_bar", bar)
+    vehicles, options = varied("2dof", runs)
+    batch = run_batch(vehicles, lin, options, progress=True)
+    assert seen["done"] == seen["total"] == sum(r.problem.n_steps for r in batch)

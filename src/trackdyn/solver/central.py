@@ -775,10 +775,11 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> 
         empty = (np.zeros((0, nc)), np.zeros((0, nc)), np.zeros((0, nc, grid)))
         alone = [np.concatenate(a) for a in zip(empty, *sampled, strict=True)]
         in_start = np.cumsum([0, *count[one]])
-        return (k, r, table, count[:in_groups].reshape(n_groups, LANES)), (*alone, in_start)
+        lanes = count[:in_groups].reshape(n_groups, LANES)
+        return (k, r, table, lanes), (*alone, in_start), int(count.sum())
 
     for first, sampled in _sampled_blocks(sample, firsts, numba.get_num_threads() > 1):
-        (k, r, table, count), (k1, r1, table1, in_start) = sampled
+        (k, r, table, count), (k1, r1, table1, in_start), steps = sampled
         row0 = rows[:-1] + (first + per_run["every"] - 1) // per_run["every"]
         if n_groups:  # mypy cannot match star-args to a compiled function's arity
             with vectorised():
@@ -800,7 +801,7 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> 
                 stop = failure if code == NEWTON_FAILED else non_finite
                 errors[b] = stop(problems[b], first + int(at))
         if advanced is not None:
-            advanced(int(count.sum()))
+            advanced(steps)
     return [
         errors[b] or {name: a[rows[b] : rows[b + 1]] for name, a in flat.items()}
         for b in range(runs)
