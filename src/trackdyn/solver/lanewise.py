@@ -37,12 +37,11 @@ _OPERAND = re.compile(r"\b([a-z])\b")
 
 
 def _compiled(source: str):
-    """The numba function defined by ``source`` (LLVM inlines it into its callers; inlined
-    by numba instead, each call typed anew, the lanes' loop took 7 s longer to compile)."""
+    """The numba function (inlined into its callers) defined by ``source``."""
     namespace: dict = {"np": np, "LANES": LANES}
     exec(source, namespace)  # noqa: S102 - the source is built in this module only
     (function,) = (v for k, v in namespace.items() if k not in ("np", "LANES", "__builtins__"))
-    return njit(fastmath=FASTMATH, error_model="numpy")(function)
+    return njit(inline="always", fastmath=FASTMATH, error_model="numpy")(function)
 
 
 def lanewise(expression: str):
