@@ -20,11 +20,11 @@ starts from the previous step's states and usually needs one solve. The matrices
 
 A run goes through `advance`; runs of one model, in full groups of `LANES`, side by side
 through `advance_lanes`: each array carries the runs (lanes) along its last, contiguous
-axis, so that every operation of a step is one loop over the lanes (which LLVM vectorises
-where it can prove the arrays apart); a lane's stick/slip states, its Newton iteration and
-its end are selects on its own mask. The sums of each lane are done in `advance`'s order
-and the loops are compiled without reassociation (`FASTMATH`), so a run's results in the
-lanes are those it gives alone, to the bit.
+axis, and each quantity of a step is a tuple of the lanes' values, which LLVM packs into
+vector registers (`trackdyn.solver.lanewise`); a lane's stick/slip states, its Newton
+iteration and its end are selects on its own mask. The sums of each lane are done in
+`advance`'s order and the loops are compiled without reassociation (`FASTMATH`), so a
+run's results in the lanes are those it gives alone, to the bit.
 
 References
 ----------
