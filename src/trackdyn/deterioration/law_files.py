@@ -43,7 +43,8 @@ def _law_table(name: str, path) -> tuple[type[LawParameters], dict, str]:
     """The law's class, its ``[name]`` table from the parameter file (without the zone
     kinds' sub-tables), and the file's name."""
     cls, table, where = _full_table(name, path)
-    return cls, {k: v for k, v in table.items() if k not in zone_kinds(name, path)}, where
+    kinds = zone_kinds(name, path)
+    return cls, {k: v for k, v in table.items() if k not in kinds}, where
 
 
 def _full_table(name: str, path) -> tuple[type[LawParameters], dict, str]:
