@@ -1,0 +1,31 @@
+"""A model's contact input is `LinearisedTrack.sample` of each of its axles, summed per
+contact as `ContactInput` weights them: the compiled sampling does numpy's and scipy's
+operations in their order, so the values are the same to the bit."""
+
+import numpy as np
+import pytest
+
+from trackdyn.track.inputs import ContactInput
+from trackdyn.vehicle.models import build_model
+from trackdyn.vehicle.parameters import load_vehicle
+
+
+@pytest.mark.parametrize("model", ["2dof", "11dof", "full"])
+def test_contact_input_is_the_sampled_track(lin, model):
+    m = build_model(model, load_vehicle("loaded"))
+    inputs = ContactInput(m, lin)
+    lo, hi = lin.track.extent
+    reach = [x for axles in m.contact_axles for x in axles]
+    # positions between sleepers, on sleepers and on the geometry's knots, in order
+    centre = np.sort(np.r_[np.linspace(lo - min(reach), hi - max(reach), 3001),
+                           lin.track.supports.position[20:30] - reach[0]])  # fmt: skip
+    centre = centre[(centre + min(reach) >= lo) & (centre + max(reach) <= hi)]
+    k, r = inputs.linear(centre)
+    for c, (rail, axles) in enumerate(zip(m.contact_rails, m.contact_axles, strict=True)):
+        want_k, want_r = np.zeros(centre.size), np.zeros(centre.size)
+        for x in axles:
+            kk, rr = lin.sample(rail, centre + x)
+            want_k += kk
+            want_r += rr * (1.0 / len(axles))
+        np.testing.assert_array_equal(k[:, c], want_k)
+        np.testing.assert_array_equal(r[:, c], want_r)
