@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from trackdyn.track.quality import longitudinal_level, segment_sd
+from trackdyn.track.quality import longitudinal_level, segment_sd_values
 from trackdyn.track.track import RAILS
 
 HANGING_GAP = 0.1e-3
@@ -30,12 +30,11 @@ def d1_sd(geometry, extent, segment_length: float):
     x = geometry.distance
     inside = (x >= extent[0]) & (x <= extent[1])
     tables = [
-        segment_sd(x[inside], longitudinal_level(x[inside], geometry.profile(r)[inside], "D1"),
-                   segment_length)
+        segment_sd_values(x[inside], longitudinal_level(x[inside], geometry.profile(r)[inside],
+                                                        "D1"), segment_length)
         for r in RAILS
     ]  # fmt: skip
-    sd = np.array([t["sd_mm"].to_numpy() for t in tables])
-    return sd, tables[0]["segment_start_m"].to_numpy(), tables[0]["segment_end_m"].to_numpy()
+    return np.array([sd for _, _, sd in tables]), tables[0][0], tables[0][1]
 
 
 def trigger_mgt(mgt, sd, threshold: float):

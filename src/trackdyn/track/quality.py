@@ -140,6 +140,14 @@ def segment_sd(distance, level, segment_length: float = 200.0) -> pd.DataFrame:
         Columns ``segment_start_m`` [m], ``segment_end_m`` [m] and ``sd_mm`` [mm].
     """
     x, v = check_series(distance, level, name="level")
+    starts, ends, sd = segment_sd_values(x, v, segment_length)
+    return pd.DataFrame({"segment_start_m": starts, "segment_end_m": ends, "sd_mm": sd})
+
+
+def segment_sd_values(x: np.ndarray, v: np.ndarray, segment_length: float):
+    """`segment_sd` as arrays (segment starts and ends [m], SD [mm]), of series already
+    checked: for callers that assess many profiles (the deterioration loop), without a
+    DataFrame each time."""
     seg = float(segment_length)
     if not (np.isfinite(seg) and seg > 0):
         raise TrackdynInputError(
@@ -160,7 +168,7 @@ def segment_sd(distance, level, segment_length: float = 200.0) -> pd.DataFrame:
         hi = np.searchsorted(x, end + tol if last else end - tol, side="right" if last else "left")
         if hi - lo >= 2:
             sd[k] = np.std(v[lo:hi]) * 1e3
-    return pd.DataFrame({"segment_start_m": starts, "segment_end_m": ends, "sd_mm": sd})
+    return starts, ends, sd
 
 
 @lru_cache(maxsize=64)
