@@ -350,6 +350,7 @@ def advance_lanes(
     dcv, dwv, hv = dc_val.reshape(-1), dw_val.reshape(-1), H.reshape(-1)
     wv, kv, rv, zl = wedge.reshape(-1), k_in.reshape(-1), r_in.reshape(-1), z.reshape(-1)
     dsv, cv, zb = ds_val.reshape(-1), contact.reshape(-1), z.view(np.int64).reshape(-1)
+    wc, cc = wedge.shape[1], contact.shape[1]  # rows of a wedge's and a contact's table
     inv2dt = 0.5 / dt
     invdt2 = 1.0 / (dt * dt)
     half, per_dt2, static = load(inv2dt, 0), load(invdt2, 0), load(static_load, 0)
@@ -426,9 +427,9 @@ def advance_lanes(
                     d = _fma(a, load(zl, col), d)
                     vv = _fma_difference(a, vv, load(q1, col), load(zl, n + col))
                 store(vfree, w, _product(vv, half))
-                normal = _normal(d, load(wv, 4 * w))
-                store(f_up, w, _product(normal, load(wv, 4 * w + 1)))
-                store(f_down, w, _product(normal, load(wv, 4 * w + 2)))
+                normal = _normal(d, load(wv, wc * w))
+                store(f_up, w, _product(normal, load(wv, wc * w + 1)))
+                store(f_down, w, _product(normal, load(wv, wc * w + 2)))
             going = load(run, 0)
             ch, pending = every, 1  # as if every lane's states changed
             for _ in range(max_iter):
@@ -457,7 +458,7 @@ def advance_lanes(
                         acc = _fma(load(jl, w * nw + u), load(rhs, u), acc)
                     store(v, w, acc)
                     st = load(state, w)
-                    new = _new_state(load(wv, 4 * w + 3), load(f_down, w), load(f_up, w), acc)
+                    new = _new_state(load(wv, wc * w + 3), load(f_down, w), load(f_up, w), acc)
                     ch = _changed(ch, new, st)
                     store(state, w, new)
                 pending = total(_pending(going, ch))
@@ -469,7 +470,7 @@ def advance_lanes(
                         status[b, 0], status[b, 1] = NEWTON_FAILED, s
                         run[b] = False
             for w in range(nw):
-                f = _stick_force(load(wv, 4 * w + 3), load(F, w), load(state, w), load(v, w))
+                f = _stick_force(load(wv, wc * w + 3), load(F, w), load(state, w), load(v, w))
                 store(F, w, f)
                 for j in range(gw_idx.shape[1]):
                     row = gw_idx[w, j]
@@ -491,7 +492,7 @@ def advance_lanes(
                 dv = zero
                 for j in range(dc_idx.shape[1]):
                     dv = _fma(load(dcv, c * dc_idx.shape[1] + j), load(out_v_l, dc_idx[c, j]), dv)
-                wl = _wheel_load(load(cv, 2 * c), dv, load(fc, c), static, load(cv, 2 * c + 1))
+                wl = _wheel_load(load(cv, cc * c), dv, load(fc, c), static, load(cv, cc * c + 1))
                 store(out_wl_l, c, wl)
             for b in range(lanes):
                 if due[b] != s:
