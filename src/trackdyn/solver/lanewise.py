@@ -25,9 +25,10 @@ from numba import njit
 
 LANES = 8
 """Runs of one model in a group of the vector lanes: a compile-time constant, so that an
-operation on a group is a fixed number of instructions (8 doubles fill an AVX-512
-register). Fewer runs than this go one by one: a group costs as much with fewer lanes
-filled."""
+operation on a group is a fixed number of instructions (8 doubles: two of the 256-bit
+registers LLVM prefers on AVX-512 machines). Fewer runs than this go one by one: a group
+costs as much with fewer lanes filled (with 4 lanes, 8 runs cost more; see the
+benchmarks)."""
 
 FASTMATH = {"nnan", "ninf", "nsz", "contract", "afn"}
 """LLVM's fast-math flags of the loops: all but reassociation, so that a run's sums are
@@ -80,7 +81,13 @@ total = _compiled("def total(t):\n    return " + " + ".join(f"t[{b}]" for b in r
 @contextmanager
 def vectorised():
     """numba compiles with LLVM's SLP vectoriser inside this context (the loops over the
-    lanes' tuples are compiled at their first call, or loaded from numba's cache)."""
+    lanes' tuples are compiled at their first call, or loaded from numba's cache).
+
+    numba's setting is the process's: a function another thread compiles meanwhile gets
+    the SLP vectoriser too. `trackdyn.solver.central.solve` enters it only around the
+    lanes' loop, after the first block's track input was sampled (which compiles the
+    sampling).
+    """
     before = numba.config.SLP_VECTORIZE
     numba.config.SLP_VECTORIZE = 1
     try:
