@@ -1,7 +1,8 @@
 """The solvers, behind one entry point: `solve` runs `Problem` s and returns their arrays.
 
 ``"central"`` is the compiled central-difference scheme (`trackdyn.solver.central`), which
-advances runs of one model side by side in the vector lanes; ``"reference"`` is scipy's
+advances runs of one model side by side in the vector lanes (their operations in
+`trackdyn.solver.lanewise`); ``"reference"`` is scipy's
 DOP853 at tight tolerance (`trackdyn.solver.reference`), slow, to check a case.
 """
 
