@@ -499,10 +499,9 @@ def _window_solve(inverse, version, centre, force, start, base_rows, seen, k, g,
                     base[i] += inv[j, i] * f
         for sweep in range(max_sweeps):
             m = 0
-            for j in range(W):
-                if closed[j] != closed0[j]:
-                    idx[m] = j
-                    m += 1
+            for j in range(W):  # written always, kept when counted: no branch
+                idx[m] = j
+                m += closed[j] != closed0[j]
             for a in range(m):
                 j = idx[a]
                 d[a] = kb[j] if closed[j] else -kb[j]
