@@ -1,9 +1,9 @@
-"""Runs in the vector lanes: ns per run-step for batches of L = 1, 4, 8, 16 runs.
+"""Runs in the vector lanes: ns per run-step for batches of L = 1, 2, 4, 8, 16 runs.
 
 Run with ``python benchmarks/lanes.py`` (``--smoke`` for a short check in CI). On one
-numba thread, a batch of L runs of one model goes as `central.solve` sends it (each full
-group of `LANES` runs side by side in the lanes, `advance_groups`; the others one by one,
-`advance_runs`), timed against the per-run loop (`advance`) in the same process, on the
+numba thread, a batch of L runs of one model goes as `central.solve` sends it (groups of
+`LANES` runs side by side in the lanes, `advance_groups`, the last with idle lanes when at
+least `MIN_LANE_RUNS` are left over; fewer one by one, `advance_runs`), timed against the per-run loop (`advance`) in the same process, on the
 same track input (8 Hz, 1 mm, a phase per run; input sampled beforehand, every 10th step
 stored, best of 5). The stored arrays of each run are checked to equal the run alone, to
 the bit.
@@ -20,6 +20,7 @@ import numpy as np
 from trackdyn.solver.central import (
     DONE,
     LANES,
+    NOT_STARTED,
     advance,
     advance_groups,
     advance_runs,
@@ -75,10 +76,11 @@ def per_run(model, k, r, repeat):
 
 def batch(model, k, r, repeat):
     """Best time [s] of the runs of ``k`` (steps, contacts, runs) as `central.solve` sends
-    them (full groups in the lanes, the others one by one), and each run's outputs."""
+    them (groups in the lanes, the others one by one), and each run's outputs."""
     steps, nc, runs = k.shape
     take = lane_groups(runs)
-    n_groups, one = take.shape[0], slice(take.size, runs)
+    n_groups, grouped = take.shape[0], np.count_nonzero(take >= 0)
+    one = slice(grouped, runs)
     rows = (steps - 1) // STORE_EVERY + 1
     mats = run_matrices([model] * runs, [DT] * runs)
     idx = {f for f in mats._fields if f.endswith("_idx")}
@@ -96,14 +98,15 @@ def batch(model, k, r, repeat):
     alone = {name: a[one] for name, a in per_run.items()}
     k_lanes, r_lanes = (in_lanes(np.moveaxis(a, 2, 0), take) for a in (k, r))
     k_one, r_one = (np.ascontiguousarray(np.moveaxis(a, 2, 0)[one].reshape(-1, nc)) for a in (k, r))
-    in_start = np.arange(runs - take.size + 1) * steps
-    count = np.full((n_groups, take.shape[1]), steps)
+    in_start = np.arange(runs - grouped + 1) * steps
+    count = np.where(take >= 0, steps, 0)  # idle lanes: none
     out = outputs(model, rows * runs)
     best = np.inf
     for _ in range(repeat):
         z = np.zeros((runs, 2 * len(model.dof_names)))
         lane_z = in_lanes(z, take)
-        status = np.zeros((runs, 2), np.int64)
+        status = np.zeros((max(runs, take.size), 2), np.int64)
+        status[runs:, 0] = NOT_STARTED  # the idle lanes'
         t = time.perf_counter()
         with vectorised():
             advance_groups(
@@ -117,7 +120,7 @@ def batch(model, k, r, repeat):
             alone["row0"], *out, status[one],
         )  # fmt: skip
         best = min(best, time.perf_counter() - t)
-        assert (status[:, 0] == DONE).all(), "a run of the benchmark stopped"
+        assert (status[:runs, 0] == DONE).all(), "a run of the benchmark stopped"
     return best, [[a[b * rows : (b + 1) * rows] for a in out] for b in range(runs)]
 
 
@@ -129,7 +132,7 @@ def main():
     repeat = 2 if opts.smoke else 5
     numba.set_num_threads(1)
     vehicle = load_vehicle("loaded")
-    sizes = (1, 4, 8, 16)
+    sizes = (1, 2, 4, 8, 16)
     print(f"ns per run-step on one thread, {steps} steps, every {STORE_EVERY}th stored")
     print(f"{'model':<11}{'per run':>9}" + "".join(f"{f'L={n}':>9}" for n in sizes)
           + f"{'8 / one':>9}{'bitwise':>9}")  # fmt: skip

@@ -1,9 +1,10 @@
 """Runs side by side in the vector lanes give, to the bit, what each run gives alone.
 
 A run alone goes through the per-run loop (`central.advance`), each full group of `LANES`
-runs of one model through the lanes (`central.advance_lanes`): the same scheme, the same
-sums in the same order, so the stored arrays must be equal bit for bit (not merely close).
-The batches here hold a group and a run left over, which goes one by one.
+runs of one model through the lanes (`central.advance_lanes`), and the runs left over
+either in a group with idle lanes (`central.MIN_LANE_RUNS` or more) or one by one: the
+same scheme, the same sums in the same order, so the stored arrays must be equal bit for
+bit (not merely close).
 """
 
 import copy
@@ -73,6 +74,26 @@ def test_lanes_on_the_nonlinear_track(lin, model):
 def test_two_groups_of_lanes(lin):
     vehicles, options = varied("2dof", 2 * central.LANES + 1)
     batch = run_batch(vehicles, lin, options)
+    assert_alone(batch, vehicles, [lin] * len(batch), options)
+
+
+def test_the_runs_left_over_go_in_lanes_or_one_by_one():
+    m, lanes = central.MIN_LANE_RUNS, central.LANES
+    assert central.lane_groups(m - 1).size == 0  # one by one
+    take = central.lane_groups(lanes + m)  # a full group, and m runs with idle lanes
+    np.testing.assert_array_equal(take[0], np.arange(lanes))
+    np.testing.assert_array_equal(take[1], np.r_[lanes : lanes + m, [-1] * (lanes - m)])
+    np.testing.assert_array_equal(central.lane_groups(lanes + m - 1), [np.arange(lanes)])
+
+
+@pytest.mark.parametrize("runs", [central.MIN_LANE_RUNS, central.LANES + central.LANES - 1])
+@pytest.mark.parametrize("model", ["2dof", "11dof"])
+def test_a_group_with_idle_lanes(lin, model, runs):
+    # the idle lanes hold a copy of the last run and are never advanced: the runs are
+    # still what they are alone, and no idle lane writes into a run's outputs
+    vehicles, options = varied(model, runs)
+    batch = run_batch(vehicles, lin, options)
+    assert not any(isinstance(r, Exception) for r in batch)
     assert_alone(batch, vehicles, [lin] * len(batch), options)
 
 

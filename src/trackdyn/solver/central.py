@@ -683,24 +683,36 @@ def step_matrices(model, dt) -> StepMatrices:
     return StepMatrices._make(a if f.endswith("_idx") else a[0] for f, a in m._asdict().items())
 
 
+MIN_LANE_RUNS = 3
+"""Runs left over from the full groups that go into a group of their own, its other lanes
+idle; fewer go one by one. A group of the 11-DOF model costs about two runs alone
+(`benchmarks/lanes.py`), whatever its lanes hold."""
+
+
 def lane_groups(runs: int) -> np.ndarray:
-    """The runs of each group of the lanes, (groups, `LANES`): the first runs, as many
-    full groups as there are; the others go one by one."""
-    return np.arange(runs // LANES * LANES).reshape(-1, LANES)
+    """The runs of each group of the lanes, (groups, `LANES`), ``-1`` for an idle lane:
+    the first runs, in full groups, and the runs left over in a group of their own when
+    there are at least `MIN_LANE_RUNS` of them; otherwise they go one by one."""
+    grouped = runs if runs % LANES >= MIN_LANE_RUNS else runs // LANES * LANES
+    take = np.full(-(-grouped // LANES) * LANES, -1)
+    take[:grouped] = np.arange(grouped)
+    return take.reshape(-1, LANES)
 
 
 def in_lanes(a, take):
     """Per-run array ``a`` (runs, ...) in the lanes: (groups, ..., lanes) for the runs
-    ``take`` (`lane_groups`)."""
+    ``take`` (`lane_groups`; an idle lane gets a copy of the last run's values, which it
+    never advances)."""
     return np.ascontiguousarray(np.moveaxis(a[take], 1, -1))
 
 
 def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> list:
     """Integrate runs of one model side by side: one compiled call per block of steps.
 
-    Each full group of `LANES` runs goes through `advance_groups` (side by side in the
-    vector lanes, in parallel over the groups), the runs left over through `advance_runs`
-    (one by one, in parallel over the runs).
+    The runs go in groups of `LANES` through `advance_groups` (side by side in the vector
+    lanes, in parallel over the groups), the last group with idle lanes when at least
+    `MIN_LANE_RUNS` runs are left over; fewer go through `advance_runs` (one by one, in
+    parallel over the runs).
 
     Parameters
     ----------
@@ -721,21 +733,23 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> 
     """
     runs = len(problems)
     take = lane_groups(runs)
-    n_groups, in_groups = take.shape[0], take.size
+    n_groups, in_groups, lanes = take.shape[0], np.count_nonzero(take >= 0), take.size
     one = slice(in_groups, runs)  # the runs one by one
     mats = run_matrices([p.model for p in problems], [p.dt for p in problems])
     idx = {f for f in mats._fields if f.endswith("_idx")}
     lane_mats = [a if f in idx else in_lanes(a, take) for f, a in mats._asdict().items()]
     run_mats = [a if f in idx else a[one] for f, a in mats._asdict().items()]
     errors: list = [None] * runs
-    status = np.zeros((runs, 2), np.int64)  # DONE: running
+    # DONE: running; the rows of idle lanes follow the runs' (there are none one by one)
+    status = np.zeros((max(runs, lanes), 2), np.int64)
+    status[runs:, 0] = NOT_STARTED
     z = np.zeros((runs, 2 * len(problems[0].model.dof_names)))
     for b, p in enumerate(problems):
         try:
             z[b] = start_state(p, mats.wedge[b])
         except TrackdynInputError as exc:
             errors[b], status[b, 0] = exc, NOT_STARTED
-    lane_z, lane_status = in_lanes(z, take), status[:in_groups].reshape(n_groups, LANES, 2)
+    lane_z, lane_status = in_lanes(z, take), status[:lanes].reshape(n_groups, LANES, 2)
     rows = np.cumsum([0] + [p.n_store for p in problems])
     flat = {name: np.empty((rows[-1], w)) for name, w in widths(problems[0].model).items()}
     per_run = dict(
@@ -755,11 +769,11 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> 
         """Track input of the block of steps from ``first`` on (none for stopped runs):
         in the lanes with each lane's number of steps, and of the runs one by one, one
         after the other, with where each starts."""
-        count = np.zeros(runs, np.int64)
+        count = np.zeros(max(runs, lanes), np.int64)
         for b, p in enumerate(problems):
             if status[b, 0] == DONE:
                 count[b] = max(min(block, p.n_steps - first), 0)
-        shape = (n_groups, int(count[:in_groups].max(initial=0)), nc, LANES)
+        shape = (n_groups, int(count[:lanes].max(initial=0)), nc, LANES)
         k, r = np.zeros(shape), np.zeros(shape)
         table = np.zeros((*shape, grid) if grid else (n_groups, 0, nc, LANES, 0))
         sampled = []
@@ -776,8 +790,8 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> 
         empty = (np.zeros((0, nc)), np.zeros((0, nc)), np.zeros((0, nc, grid)))
         alone = [np.concatenate(a) for a in zip(empty, *sampled, strict=True)]
         in_start = np.cumsum([0, *count[one]])
-        lanes = count[:in_groups].reshape(n_groups, LANES)
-        return (k, r, table, lanes), (*alone, in_start), int(count.sum())
+        per_lane = count[:lanes].reshape(n_groups, LANES)
+        return (k, r, table, per_lane), (*alone, in_start), int(count.sum())
 
     for first, sampled in _sampled_blocks(sample, firsts, numba.get_num_threads() > 1):
         (k, r, table, count), (k1, r1, table1, in_start), steps = sampled
