@@ -3,10 +3,10 @@
 Run with ``python benchmarks/lanes.py`` (``--smoke`` for a short check in CI). On one
 numba thread, a batch of L runs of one model goes as `central.solve` sends it (groups of
 `LANES` runs side by side in the lanes, `advance_groups`, the last with idle lanes when at
-least `MIN_LANE_RUNS` are left over; fewer one by one, `advance_runs`), timed against the per-run loop (`advance`) in the same process, on the
-same track input (8 Hz, 1 mm, a phase per run; input sampled beforehand, every 10th step
-stored, best of 5). The stored arrays of each run are checked to equal the run alone, to
-the bit.
+least `MIN_LANE_RUNS` are left over; fewer one by one, `advance_runs`), timed against
+the per-run loop (`advance`) in the same process, on the same track input (8 Hz, 1 mm, a
+phase per run; input sampled beforehand, every 10th step stored, best of 5). The stored
+arrays of each run are checked to equal the run alone, to the bit.
 """
 
 from __future__ import annotations
