@@ -4,8 +4,9 @@ Run with ``python benchmarks/line.py`` (``--smoke``: 2 sections of 300 m over 1 
 Writes 20 synthetic 1 km sections (FRA class 5 geometry, different seeds, the example's
 stiffness field) and a sections CSV into a temporary folder, then runs the built-in
 example scenario's traffic, law and loop (50 MGT, tamped start, 11-DOF model) over them,
-serially in this process and on a 2-worker LocalCluster. Reports wall times, the speed-up
-and the peak memory (resident set) of the processes that ran the sections.
+serially in this process and on a 2-worker LocalCluster, as `run_sections` sends them (up
+to `TOGETHER` sections stepped together a task). Reports wall times, the speed-up and the
+peak memory (resident set) of the processes that ran the sections.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from pathlib import Path
 
 from trackdyn.commands.deteriorate.scenario import load_deterioration
 from trackdyn.commands.deteriorate.sections import section_tasks
-from trackdyn.deterioration.runs import run_section
+from trackdyn.deterioration.runs import TOGETHER, run_group
 from trackdyn.io import write_geometry, write_supports
 from trackdyn.parallel import run_tasks
 from trackdyn.track.synthetic import synthetic_track
@@ -37,11 +38,12 @@ def write_line(folder: Path, n: int, length: float) -> Path:
     return folder / "sections.csv"
 
 
-def measured_section(task):
-    """`run_section`, with the peak resident memory of the process that ran it [MB]."""
-    result = run_section(task)
-    result["peak_MB"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    return result
+def measured_group(tasks):
+    """`run_group`, with the peak resident memory of the process that ran it [MB]."""
+    results = run_group(tasks)
+    for result in results:
+        result["peak_MB"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    return results
 
 
 def main():
@@ -59,7 +61,7 @@ def main():
         times, peaks = {}, {}
         for workers in (1, 2):
             clock = time.perf_counter()
-            results = run_tasks(tasks, measured_section, workers=workers)
+            results = run_tasks(tasks, measured_group, workers=workers, together=TOGETHER)
             times[workers] = time.perf_counter() - clock
             failed = [r for r in results if "error" in r]
             assert not failed, failed[0]["error"]

@@ -9,23 +9,24 @@ line of 20 synthetic 1 km sections (FRA class 5 geometry, different seeds, tampe
 through the life-cycle horizon to it through `trackdyn.parallel.run_tasks` with
 ``scheduler=``: the built-in example's traffic, law and 11-DOF model, 300 MGT with the
 life set-up of ``benchmarks/deteriorate.py --life`` (the default threshold maintenance
-policy, 2 mm D1 SD, 200 m segments).
+policy, 2 mm D1 SD, 200 m segments), as `run_sections` sends them: up to `TOGETHER`
+sections a task, stepped together (`run_group`), as many tasks for each worker.
 
 Each task's cost is the CPU time (user and system, all threads) of the worker process
-while it ran the task, in core-seconds. Reported: wall time and core-seconds on 1 and 2
-workers, core-seconds per km and per km x MGT, the speed-up from 1 to 2 workers, and,
-extrapolated from the 1-worker core-seconds per km x MGT and the 2-worker parallel
-efficiency, the wall time of 1000 km through 300 MGT on 16 workers, against the goal of
-10 minutes (9600 core-seconds). The 20 km line runs through the whole 300 MGT (about 7
-minutes on 1 worker and 4 on 2 on a 2-core machine); only the 1000 km figure is
-extrapolated. Dask's nanny starts each worker with ``MALLOC_TRIM_THRESHOLD_=65536``, which
-each task undoes (`trackdyn.parallel.keep_freed_memory`); the CPU spent in the kernel is
-shown apart.
+while it ran the task, in core-seconds (split evenly between its sections). Reported: wall
+time and core-seconds on 1 and 2 workers, core-seconds per km and per km x MGT, the
+speed-up from 1 to 2 workers, and, extrapolated from the 1-worker core-seconds per km x
+MGT and the 2-worker parallel efficiency, the wall time of 1000 km through 300 MGT on 16
+workers, against the goal of 10 minutes (9600 core-seconds). The 20 km line runs through
+the whole 300 MGT (about 7 minutes on 1 worker and 4 on 2 on a 2-core machine); only the
+1000 km figure is extrapolated. Dask's nanny starts each worker with
+``MALLOC_TRIM_THRESHOLD_=65536``, which each task undoes
+(`trackdyn.parallel.keep_freed_memory`); the CPU spent in the kernel is shown apart.
 
 Then, in this process: one 11-DOF run (`simulate`, loaded wagon) over a 500 m section
 (best of 5, before and after), and the deterioration of 4 sections of 500 m through 50 MGT
-(no maintenance) one after another (``--workers 1``): a section's deterioration in single
-runs (goal: at most 8) and km x MGT per core-second.
+(no maintenance) with ``--workers 1`` (one task, the 4 stepped together): a section's
+deterioration in single runs (goal: at most 8) and km x MGT per core-second.
 
 Every subprocess is stopped at the end, also on an error or Ctrl-C.
 """
@@ -47,29 +48,34 @@ from pathlib import Path
 from line import write_line
 from trackdyn.commands.deteriorate.scenario import MaintenanceSpec, load_deterioration
 from trackdyn.commands.deteriorate.sections import section_tasks
-from trackdyn.deterioration.runs import run_section
+from trackdyn.deterioration.runs import TOGETHER, run_group
 from trackdyn.parallel import run_tasks
 
 GOAL_CORE_S = 9600.0
 """Goal: 1000 km through 300 MGT in 10 minutes on 16 workers [core-seconds]."""
 
 
-def measured_section(task):
-    """`run_section`, with the CPU time [s] of the process (all its threads; ``system_s`` of
-    it in the kernel), the wall time [s] and the loop's own split of its wall time."""
+def measured_group(tasks):
+    """`run_group`, with the CPU time [s] of the process (all its threads; ``system_s`` of
+    it in the kernel) and the wall time [s], split evenly between its sections, and each
+    loop's own split of its wall time."""
     cpu, wall, times = time.process_time(), time.perf_counter(), os.times()
-    result = run_section(task)
-    result["cpu_s"] = time.process_time() - cpu
-    result["wall_s"] = time.perf_counter() - wall
-    result["system_s"] = os.times().system - times.system
-    result["pid"] = os.getpid()
-    if "dataset" in result:
-        ds = result.pop("dataset")  # only what the benchmark reads comes back
-        result["steps"] = int(ds.attrs["steps"])
-        result["tampings"] = int(ds.sizes.get("intervention", 0))
-        for key in ("time_vehicle_runs_s", "time_beam_solves_s", "time_bookkeeping_s"):
-            result[key] = float(ds.attrs.get(key, 0.0))
-    return result
+    results = run_group(tasks)
+    share = {
+        "cpu_s": (time.process_time() - cpu) / len(tasks),
+        "wall_s": (time.perf_counter() - wall) / len(tasks),
+        "system_s": (os.times().system - times.system) / len(tasks),
+        "pid": os.getpid(),
+    }
+    for result in results:
+        result.update(share)
+        if "dataset" in result:
+            ds = result.pop("dataset")  # only what the benchmark reads comes back
+            result["steps"] = int(ds.attrs["steps"])
+            result["tampings"] = int(ds.sizes.get("intervention", 0))
+            for key in ("time_vehicle_runs_s", "time_beam_solves_s", "time_bookkeeping_s"):
+                result[key] = float(ds.attrs.get(key, 0.0))
+    return results
 
 
 def _stop(proc: subprocess.Popen) -> None:
@@ -224,7 +230,7 @@ class Timing:
 
 def run_line(tasks, address, km, mgt, workers) -> Timing:
     clock = time.perf_counter()
-    results = run_tasks(tasks, measured_section, scheduler=address)
+    results = run_tasks(tasks, measured_group, scheduler=address, together=TOGETHER)
     wall = time.perf_counter() - clock
     failed = [r for r in results if "error" in r]
     if failed:
@@ -258,7 +264,7 @@ def single_runs(folder: Path, n: int, length: float, mgt: float, repeat: int) ->
     one_run()  # compile or load from numba's cache
     before = one_run()
     cpu, wall = time.process_time(), time.perf_counter()
-    results = run_tasks(tasks, measured_section, workers=1)
+    results = run_tasks(tasks, measured_group, workers=1, together=TOGETHER)
     cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
     failed = [r for r in results if "error" in r]
     if failed:

@@ -10,6 +10,7 @@ sized to the machine; with ``workers=1`` they run one after another in this proc
 from __future__ import annotations
 
 import functools
+import math
 import os
 import threading
 from concurrent.futures import CancelledError
@@ -163,6 +164,37 @@ def _on_one_core(func, task):
     return func(task)
 
 
+def groups(tasks: list, together: int, workers: int) -> list[list]:
+    """``tasks`` in consecutive groups of at most ``together``, as even in size as can be:
+    as few groups as that allows, rounded up to a multiple of ``workers`` (so that each
+    worker gets as many), and no more than there are tasks.
+
+    Parameters
+    ----------
+    tasks : list
+        The tasks.
+    together : int
+        Tasks in a group, at most.
+    workers : int
+        Workers the groups go to.
+    """
+    n = len(tasks)
+    fewest = math.ceil(n / together)
+    count = min(n, math.ceil(fewest / workers) * workers)
+    edges = [n * g // count for g in range(count + 1)] if n else [0]
+    return [tasks[a:b] for a, b in zip(edges[:-1], edges[1:], strict=True)]
+
+
+def _as_list(func):
+    """``func`` of one task as a function of a list of them (of one)."""
+    return functools.partial(_each, func)
+
+
+def _each(func, tasks: list) -> list:
+    """``func`` on each of ``tasks``."""
+    return [func(t) for t in tasks]
+
+
 def run_tasks(
     tasks: list,
     func,
@@ -171,6 +203,7 @@ def run_tasks(
     scheduler: str | None = None,
     progress: bool = False,
     label: str = "runs",
+    together: int = 1,
 ) -> list:
     """Run ``func`` on every task; results in the order of ``tasks``.
 
@@ -179,8 +212,9 @@ def run_tasks(
     tasks : list
         Independent tasks; small picklable objects.
     func : callable
-        Module-level function run on each task; it should report failures in its result
-        rather than raise.
+        Module-level function run on each task (or, with ``together``, on each list of
+        tasks, returning a list of their results); it should report failures in its
+        result rather than raise.
     workers : int, optional
         Worker processes of the local cluster (default: one per core); 1 runs the tasks
         serially in this process.
@@ -190,24 +224,30 @@ def run_tasks(
         Show a progress bar counting finished tasks.
     label : str
         What the progress bar counts.
+    together : int
+        Tasks ``func`` takes at once, at most (`groups`); 1: one task, not a list.
     """
     require_workers(workers)
+    call = func if together > 1 else _as_list(func)
     with progress_bar(progress, len(tasks), label) as bar:
         if workers == 1 and not scheduler:
             results = []
-            for t in tasks:
-                results.append(func(t))
-                bar.advance()
+            for group in groups(tasks, together, 1):
+                results += call(group)
+                bar.advance(len(group))
             return results
         from distributed import as_completed
 
         shared = _shared.get()
         client, cluster = (shared, None) if shared is not None else _client(workers, scheduler)
         try:
-            futures = client.map(functools.partial(_on_one_core, func), tasks, pure=False)
-            for _ in as_completed(futures):
-                bar.advance()
-            return client.gather(futures)
+            count = max(1, len(client.scheduler_info()["workers"]))
+            parts = groups(tasks, together, count)
+            futures = client.map(functools.partial(_on_one_core, call), parts, pure=False)
+            size = {f.key: len(part) for f, part in zip(futures, parts, strict=True)}
+            for future in as_completed(futures):
+                bar.advance(size[future.key])
+            return [r for part in client.gather(futures) for r in part]
         except (CancelledError, OSError) as exc:  # the scheduler went away mid-run
             where = f" at {scheduler}" if scheduler else ""
             reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__

@@ -12,7 +12,8 @@ loss), in log space for parameters whose bounds are positive and as they are oth
 within the ``min`` and ``max`` of the parameter file
 (`trackdyn.deterioration.law_files.law_bounds`). The Jacobian comes from forward
 differences of `FD_STEP`; a point and its neighbours run as one batch through
-`trackdyn.deterioration.runs.run_sections` (one Dask task per parameter set). Standard
+`trackdyn.deterioration.runs.run_sections` (a few parameter sets per Dask task, stepped
+together so that their vehicle runs share the solver's vector lanes). Standard
 errors: ``σ² (JᵀJ)⁻¹`` at the solution, σ the robust (MAD) scale of the residuals, mapped
 to the parameters by the delta method.
 
@@ -48,7 +49,13 @@ from trackdyn.calibration.surveys import (
 )
 from trackdyn.deterioration.law_files import law_bounds, law_file_table, law_units
 from trackdyn.deterioration.loop import NO_TRAFFIC_LOAD, LoopOptions
-from trackdyn.deterioration.runs import Section, SectionTask, run_section, run_sections
+from trackdyn.deterioration.runs import (
+    TOGETHER,
+    Section,
+    SectionTask,
+    run_group,
+    run_sections,
+)
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import read_supports
 from trackdyn.track.quality import WAVEBANDS
@@ -304,7 +311,8 @@ def run_laws(problem: Calibration, laws, options, *, workers=None, scheduler=Non
         return run_sections(tasks, workers=workers, scheduler=scheduler)
     from trackdyn.parallel import run_tasks
 
-    results = run_tasks(tasks, run_section, workers=workers, scheduler=scheduler, label="runs")
+    results = run_tasks(tasks, run_group, workers=workers, scheduler=scheduler, label="runs",
+                        together=TOGETHER)  # fmt: skip
     return [r.get("dataset", r.get("error")) for r in results]
 
 

@@ -257,14 +257,17 @@ class TrafficRun:
 
 
 def vehicle_runs(runs, lins: list[LinearisedTrack], timing: dict, ballast=None,
-                 state=None) -> list:  # fmt: skip
+                 state=None):  # fmt: skip
     """Run every vehicle of the traffic once over the track as it stands; a vehicle
-    ``held`` keeps its latest run.
+    ``held`` keeps its latest run. A generator (``yield from`` it): it yields the runs to
+    make and is sent their results (`step_together`).
 
-    The vehicles run side by side in one batch (`trackdyn.simulation.run_batch`), each
-    over its own linearisation of the track, or on the discrete track of the ballast's
-    rail-seat stiffness and ``state``'s gaps; only the solver's arrays come back, no
-    Datasets. Adds the seconds spent to ``timing["vehicle"]``.
+    The vehicles run side by side in one batch (`trackdyn.simulation.run_batch`), with
+    those of the other sections stepped together, each over its own linearisation of the
+    track, or on the discrete track of the ballast's rail-seat stiffness and ``state``'s
+    gaps; only the solver's arrays come back, no Datasets. Adds this section's share of
+    the batch's seconds to ``timing["vehicle"]`` and the rest of the time it waited (the
+    other sections' runs and steps) to ``timing["others"]``.
 
     Parameters
     ----------
@@ -279,6 +282,12 @@ def vehicle_runs(runs, lins: list[LinearisedTrack], timing: dict, ballast=None,
     state : BallastState, optional
         Its current state (each run records it, for `StepLoads`).
 
+    Yields
+    ------
+    tuple of list
+        Vehicles, tracks and run options of the runs to make; sent back: their results
+        (a `trackdyn.simulation.Run` or an exception each) and the seconds they took.
+
     Returns
     -------
     list of trackdyn.simulation.Run
@@ -286,7 +295,6 @@ def vehicle_runs(runs, lins: list[LinearisedTrack], timing: dict, ballast=None,
     """
     fresh = [(run, lin) for run, lin in zip(runs, lins, strict=True) if not run.keeps]
     if fresh:
-        clock = time.perf_counter()
         vehicles = [run.traffic.vehicle for run, _ in fresh]
         tracks = [
             discrete_track(lin, run.discrete, stiffness=ballast.stiffness, gap=state.gap)
@@ -296,13 +304,63 @@ def vehicle_runs(runs, lins: list[LinearisedTrack], timing: dict, ballast=None,
         ]
         for run, _ in fresh:
             run.state = state
-        solved = run_batch(vehicles, tracks, [run.run for run, _ in fresh])
-        timing["vehicle"] += time.perf_counter() - clock
+        clock = time.perf_counter()
+        solved, seconds = yield vehicles, tracks, [run.run for run, _ in fresh]
+        timing["vehicle"] += seconds
+        timing["others"] += time.perf_counter() - clock - seconds
         for (run, _), result in zip(fresh, solved, strict=True):
             if isinstance(result, Exception):
                 raise result
             run.solved = result
     return [run.solved for run in runs]
+
+
+def step_together(loops: list) -> list:
+    """Drive the deterioration loops of several sections in step (`predicting`): at each
+    round, the vehicle runs every loop asks for (`vehicle_runs`) go in one batch per
+    vehicle model (`trackdyn.simulation.run_batch`), so that the runs of different
+    sections share the solver's vector lanes. A run's result does not depend on the others
+    in its batch, so each loop gives what it gives alone.
+
+    Parameters
+    ----------
+    loops : list of generator
+        The loops, not started.
+
+    Returns
+    -------
+    list
+        Per loop, what it returns, or the exception that stopped it (the others go on).
+    """
+    results: list = [None] * len(loops)
+    asked: dict[int, tuple] = {}
+
+    def resume(i, sent):
+        try:
+            asked[i] = loops[i].send(sent)
+        except StopIteration as done:
+            results[i] = done.value
+        except Exception as exc:  # noqa: BLE001 - this section's failure, the others go on
+            results[i] = exc
+
+    for i in range(len(loops)):
+        resume(i, None)
+    while asked:
+        rounds, asked = asked, {}
+        answers: dict[int, list] = {i: [None] * len(r[0]) for i, r in rounds.items()}
+        seconds = dict.fromkeys(rounds, 0.0)
+        runs = [(i, j) for i, r in rounds.items() for j in range(len(r[0]))]
+        for model in dict.fromkeys(rounds[i][2][j].model for i, j in runs):
+            mine = [(i, j) for i, j in runs if rounds[i][2][j].model == model]
+            clock = time.perf_counter()
+            solved = run_batch(*([rounds[i][part][j] for i, j in mine] for part in range(3)))
+            share = (time.perf_counter() - clock) / len(mine)  # split evenly
+            for (i, j), result in zip(mine, solved, strict=True):
+                answers[i][j] = result
+                seconds[i] += share
+        for i in rounds:
+            resume(i, (answers[i], seconds[i]))
+    return results
 
 
 def rail_seat_loads(runs, solved, ballast, state, timing: dict) -> list:

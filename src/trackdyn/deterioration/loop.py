@@ -72,7 +72,12 @@ from scipy.optimize import brentq
 
 from trackdyn.deterioration.accumulation import Zoned
 from trackdyn.deterioration.ballast import Ballast, rate_field
-from trackdyn.deterioration.loads import TrafficRun, rail_seat_loads, vehicle_runs
+from trackdyn.deterioration.loads import (
+    TrafficRun,
+    rail_seat_loads,
+    step_together,
+    vehicle_runs,
+)
 from trackdyn.deterioration.maintenance import Maintenance, MaintenanceOptions
 from trackdyn.deterioration.results import d1_sd, make_dataset
 from trackdyn.deterioration.starts import STARTS, surveyed_geometry, tamped_geometry
@@ -290,6 +295,24 @@ def step_size(increment, cap: float, limit) -> float:
 def predict(track: Track, traffic, law, options=None, *, zones=(), progress=False):
     """Predict settlement and geometry of a track section over accumulated tonnage.
 
+    Parameters as `predicting`, which this runs on its own (`step_together`).
+
+    Returns
+    -------
+    xarray.Dataset
+        See `trackdyn.deterioration.results.make_dataset`.
+    """
+    (result,) = step_together([predicting(track, traffic, law, options, zones=zones,
+                                          progress=progress)])  # fmt: skip
+    if isinstance(result, Exception):
+        raise result
+    return result
+
+
+def predicting(track: Track, traffic, law, options=None, *, zones=(), progress=False):
+    """`predict` as a generator, to be stepped together with other sections'
+    (`step_together`): it yields each step's vehicle runs (`vehicle_runs`).
+
     Parameters
     ----------
     track : Track
@@ -358,7 +381,7 @@ def predict(track: Track, traffic, law, options=None, *, zones=(), progress=Fals
         if lins
         else track.linearise(NO_TRAFFIC_LOAD, o.run.delta, extrapolate=o.run.extrapolate)
     )
-    timing = {"vehicle": 0.0, "beam": 0.0}
+    timing = {"vehicle": 0.0, "beam": 0.0, "others": 0.0}  # others: other sections' time
     clock = time.perf_counter()
     ballast = Ballast(base, rail_section(o.rail), o.sleeper_mass, seated=seated)
     state = ballast.initial
@@ -406,7 +429,7 @@ def predict(track: Track, traffic, law, options=None, *, zones=(), progress=Fals
             timing["beam"] += time.perf_counter() - clock
             step_lins = [current[run.lin.static_load] for run in runs]
             ran = sum(not run.keeps for run in runs)
-            solved = vehicle_runs(runs, step_lins, timing, ballast, state)
+            solved = yield from vehicle_runs(runs, step_lins, timing, ballast, state)
             target = ends[np.searchsorted(ends, mgt, side="right")]
             if maint is not None:
                 target = min(target, maint.next_due(mgt))
@@ -482,7 +505,7 @@ def predict(track: Track, traffic, law, options=None, *, zones=(), progress=Fals
                     fresh = mgt
                     timing["beam"] += time.perf_counter() - clock
             bar.update(mgt)
-    timing["total"] = time.perf_counter() - t0
+    timing["total"] = time.perf_counter() - t0 - timing["others"]
     record = {"cycles": acc.N, "rate": rate, "by_vehicle": by_vehicle,
               "kind": _kinds(zones, pos), "interventions": maint.done if maint else []}  # fmt: skip
     return make_dataset(track, history, steps, snap_at, record, timing, traffic, law, o)

@@ -1,0 +1,108 @@
+"""Sections stepped together (`run_group`) give, to the bit, what each gives alone.
+
+Their vehicle runs share batches of the solver, so that runs of different sections go
+side by side in the vector lanes (`trackdyn.solver.central.lane_groups`); a run's result
+does not depend on the other runs of its batch, so each section's Dataset must be
+identical to the one it gives alone (`run_section`), and a section that fails stops
+alone.
+"""
+
+import dataclasses
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from trackdyn.deterioration import LoopOptions, Traffic, load_law
+from trackdyn.deterioration.runs import Section, SectionTask, run_group, run_section
+from trackdyn.io import write_geometry, write_supports
+from trackdyn.options import RunOptions
+from trackdyn.parallel import groups
+from trackdyn.solver import central
+from trackdyn.track.synthetic import SoftSpot, synthetic_track
+from trackdyn.vehicle.parameters import load_vehicle
+
+PASSAGES = 8065.0  # 1e6 t / (104 t + 20 t), the example's coal traffic [per MGT]
+TRAFFIC = (
+    Traffic(load_vehicle("loaded"), 60 / 3.6, PASSAGES, "loaded"),
+    Traffic(load_vehicle("empty"), 60 / 3.6, PASSAGES, "empty"),
+)
+
+
+@pytest.fixture(scope="module")
+def tasks(tmp_path_factory):
+    """Three 100 m sections (different geometry, one with a soft spot), 11-DOF, both
+    wagons, 10 MGT: 3 to 6 runs a round, in a group of the lanes with idle lanes."""
+    path = tmp_path_factory.mktemp("together")
+    out = []
+    for i in range(3):
+        features = (SoftSpot(50.0, 6.0),) if i == 1 else ()
+        trk = synthetic_track(100.0, spectrum="fra5", seed=10 + i, features=features)
+        geometry, supports = path / f"s{i}_geometry.csv", path / f"s{i}_supports.csv"
+        write_geometry(trk.geometry, geometry)
+        write_supports(trk.supports, supports)
+        options = LoopOptions(run=RunOptions(model="11dof"), total_mgt=10.0,
+                              snapshot_every_mgt=5.0, segment_length=50.0, seed=i)  # fmt: skip
+        section = Section(f"s{i}", str(geometry), str(supports))
+        out.append(SectionTask(section, TRAFFIC, load_law("power"), options))
+    return out
+
+
+def without_times(ds):
+    ds.attrs = {k: v for k, v in ds.attrs.items() if not k.startswith("time_")}
+    return ds
+
+
+def test_sections_stepped_together_give_what_each_gives_alone(tasks, monkeypatch):
+    batches = []
+    solve = central.solve
+
+    def counted(problems, *args, **kwargs):
+        batches.append(len(problems))
+        return solve(problems, *args, **kwargs)
+
+    monkeypatch.setattr(central, "solve", counted)
+    together = run_group(tasks)
+    in_lanes = [b for b in batches if b >= central.MIN_LANE_RUNS]
+    assert in_lanes, batches  # the lanes were used
+    for result, task in zip(together, tasks, strict=True):
+        alone = run_section(task)
+        assert result["name"] == alone["name"] == task.section.name
+        xr.testing.assert_identical(without_times(result["dataset"]),
+                                    without_times(alone["dataset"]))  # fmt: skip
+    first = together[0]["dataset"].settlement.isel(mgt=-1).values
+    assert not np.allclose(first, together[1]["dataset"].settlement.isel(mgt=-1).values)
+
+
+def test_a_section_that_fails_stops_alone(tasks):
+    # the second section may take only one step: it stops with its error after the first
+    # round of runs, the others go on to what they give alone
+    short = tasks[1].options.model_copy(update={"max_steps": 1})
+    broken = [tasks[0], dataclasses.replace(tasks[1], options=short), tasks[2]]
+    results = run_group(broken)
+    assert "dataset" not in results[1] and "max_steps = 1" in results[1]["error"]
+    for i in (0, 2):
+        xr.testing.assert_identical(without_times(results[i]["dataset"]),
+                                    without_times(run_section(tasks[i])["dataset"]))  # fmt: skip
+
+
+def test_a_section_whose_files_fail_is_reported_and_the_others_run(tasks):
+    missing = dataclasses.replace(tasks[0].section, geometry="nope.csv")
+    results = run_group([dataclasses.replace(tasks[0], section=missing), tasks[2]])
+    assert "nope.csv" in results[0]["error"] and "dataset" in results[1]
+
+
+@pytest.mark.parametrize(
+    ("n", "together", "workers", "sizes"),
+    [
+        (20, 4, 2, [3, 3, 4, 3, 3, 4]),  # 5 groups of 4 rounded up to 6: 3 for each worker
+        (4, 4, 1, [4]),
+        (5, 4, 1, [2, 3]),
+        (3, 4, 4, [1, 1, 1]),  # no more groups than tasks
+        (0, 4, 2, []),
+    ],
+)
+def test_groups_of_tasks(n, together, workers, sizes):
+    parts = groups(list(range(n)), together, workers)
+    assert [len(p) for p in parts] == sizes
+    assert [t for p in parts for t in p] == list(range(n))  # in order, each once
