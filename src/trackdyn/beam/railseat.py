@@ -479,15 +479,17 @@ def _window_solve(inverse, version, centre, force, start, base_rows, seen, k, g,
     support, deflection = np.empty((B if rows else 0, W)), np.empty((B if rows else 0, W))
     peak = np.zeros((wheels, n))
     closed0, closed = np.empty(W, np.bool_), np.empty(W, np.bool_)
-    idx = np.empty(W, np.int64)
+    idx = np.empty(W, np.uint64)  # unsigned: numba checks signed indices for wrapping
     kb, gb, ub = np.empty(W), np.empty(W), np.empty(W)
     v, d, e, z, c = np.empty(W), np.empty(W), np.empty(W), np.empty(W), np.empty((W, W))
     unsettled = 0
     for b in range(B):
         inv, first, base = inverse[centre[b]], centre[b] + 1, base_rows[b]
+        if b == 0 or centre[b] != centre[b - 1]:  # a window's rows follow each other
+            for j in range(W):
+                kb[j], gb[j], ub[j] = k[first + j], g[first + j], u0[first + j]
+                closed0[j] = ub[j] > gb[j]
         for j in range(W):
-            kb[j], gb[j], ub[j] = k[first + j], g[first + j], u0[first + j]
-            closed0[j] = ub[j] > gb[j]
             closed[j] = start[b, j]
         if seen[b] != version[centre[b]]:
             seen[b] = version[centre[b]]
@@ -507,10 +509,12 @@ def _window_solve(inverse, version, centre, force, start, base_rows, seen, k, g,
                 d[a] = kb[j] if closed[j] else -kb[j]
                 e[a] = d[a] * (ub[j] - gb[j])
             for a in range(m):  # x0 at the changed supports only; D^-1 + U^T A^-1 U
-                x0 = base[idx[a]]
+                ia = idx[a]
+                row = inv[ia]
+                x0 = base[ia]
                 for q in range(m):
-                    x0 -= inv[idx[q], idx[a]] * e[q]
-                    c[a, q] = inv[idx[a], idx[q]]
+                    x0 -= inv[idx[q], ia] * e[q]
+                    c[a, q] = row[idx[q]]
                 c[a, a] += 1.0 / d[a]
                 z[a] = x0
             _ldl_solve(c, z, m)
@@ -518,8 +522,9 @@ def _window_solve(inverse, version, centre, force, start, base_rows, seen, k, g,
                 v[i] = base[i]
             for a in range(m):  # v = x0 - A^-1 U z = base - A^-1 U (e + z), one pass
                 w = e[a] + z[a]
+                row = inv[idx[a]]  # a row, not an index pair per element: vectorised
                 for i in range(W):
-                    v[i] -= inv[idx[a], i] * w
+                    v[i] -= row[i] * w
             changed = 0  # counted, not branched on
             for j in range(W):
                 now = ub[j] + v[j] > gb[j]
@@ -529,14 +534,13 @@ def _window_solve(inverse, version, centre, force, start, base_rows, seen, k, g,
                 break
             if sweep == max_sweeps - 1:
                 unsettled += 1
-        wheel = b % wheels
         for j in range(W):
             start[b, j] = closed[j]
-            y = ub[j] + v[j]
-            f = kb[j] * max(y - gb[j], 0.0)
             if rows:
-                deflection[b, j], support[b, j] = y, f
+                y = ub[j] + v[j]
+                deflection[b, j], support[b, j] = y, kb[j] * max(y - gb[j], 0.0)
+        pk = peak[b % wheels]
+        for j in range(max(0, half - centre[b]), min(W, n + half - centre[b])):  # in the section
             i = centre[b] + j - half
-            if 0 <= i < n and f > peak[wheel, i]:
-                peak[wheel, i] = f
+            pk[i] = max(pk[i], kb[j] * max(ub[j] + v[j] - gb[j], 0.0))
     return support, deflection, peak, unsettled
