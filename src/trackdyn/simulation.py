@@ -24,7 +24,7 @@ from trackdyn.limits import MAX_STEPS
 from trackdyn.options import RunOptions
 from trackdyn.progress import progress_bar
 from trackdyn.results import make_dataset
-from trackdyn.solver import Problem, discrete, solve
+from trackdyn.solver import OUTPUTS, Problem, discrete, solve
 from trackdyn.solver.central import STEPS_PER_PERIOD, highest_frequency
 from trackdyn.track.discrete import DiscreteTrack, discrete_track
 from trackdyn.track.inputs import ContactInput
@@ -148,11 +148,14 @@ class Run:
 
 
 def run_batch(vehicles: list[Vehicle], tracks, options: list[RunOptions], *,
-              progress: bool = False, newton_max_iter: int = 50) -> list:  # fmt: skip
+              progress: bool = False, newton_max_iter: int = 50,
+              keep=OUTPUTS) -> list:  # fmt: skip
     """Run several vehicles over a track side by side; the solver's arrays of each.
 
     What `simulate_batch` does without building Datasets, for callers that need only a few
-    arrays (the deterioration loop). Parameters as for `simulate_batch`.
+    arrays (the deterioration loop). Parameters as for `simulate_batch`; ``keep``: the
+    `trackdyn.solver.OUTPUTS` a run on the Winkler track stores and returns (a run on the
+    discrete track returns all of its own).
 
     Returns
     -------
@@ -192,7 +195,8 @@ def run_batch(vehicles: list[Vehicle], tracks, options: list[RunOptions], *,
         for solver in dict.fromkeys(options[i].solver for i in todo):
             index = [i for i in todo if options[i].solver == solver]
             batch = [made[i] for i in index]
-            solved = solve(batch, solver, newton_max_iter=newton_max_iter, advanced=bar.advance)
+            solved = solve(batch, solver, newton_max_iter=newton_max_iter, advanced=bar.advance,
+                           keep=keep)  # fmt: skip
             for i, out in zip(index, solved, strict=True):
                 results[i] = out if isinstance(out, Exception) else Run(made[i], out)
     return results

@@ -97,6 +97,19 @@ def test_a_group_with_idle_lanes(lin, model, runs):
     assert_alone(batch, vehicles, [lin] * len(batch), options)
 
 
+@pytest.mark.parametrize("model", ["2dof", "11dof"])
+def test_kept_outputs_are_those_of_a_full_run(lin, model):
+    # the deterioration loop keeps only the wheel loads: the solver writes no other
+    # output, and the wheel loads are those of the full run, to the bit (in the lanes and
+    # one by one)
+    vehicles, options = varied(model, central.LANES + 1)
+    full = run_batch(vehicles, lin, options)
+    kept = run_batch(vehicles, lin, options, keep=("wl",))
+    for a, b in zip(full, kept, strict=True):
+        assert list(b.out) == ["wl"]
+        np.testing.assert_array_equal(b.out["wl"], a.out["wl"])
+
+
 def test_a_lane_whose_newton_fails_stops_alone(lin):
     # the loaded wagon's wedges (runs 1 and 4) fail part way, the sticky ones at some
     # speeds, later or not at all
@@ -128,6 +141,11 @@ def test_a_non_finite_lane_stops_alone(lin, monkeypatch):
         assert isinstance(r, TrackdynInputError) == (i == 1)
     assert "non-finite displacements" in str(batch[1])
     assert_alone(batch, vehicles, tracks, options)
+    # found the same way when the displacements are not stored (in the lanes and alone)
+    kept = run_batch(vehicles, tracks, options, keep=("wl",))
+    assert str(kept[1]) == str(batch[1])
+    (alone,) = run_batch(vehicles[1:2], tracks[1:2], options[1:2], keep=("wl",))
+    assert str(alone) == str(batch[1])
 
 
 @pytest.mark.parametrize("runs", [1, 3, central.LANES + 1])

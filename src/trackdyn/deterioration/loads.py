@@ -46,6 +46,11 @@ the load cycles, not the last 0.1 % of the wheel load. Measured on the built-in 
 50 MGT D1 SD of every segment within 0.003 %, at half the vehicle runs' cost."""
 
 
+KEPT = ("wl",)
+"""What the loop's runs on the Winkler track store: the wheel loads (`wheel_forces`), not
+the displacements, velocities and forces of every stored step."""
+
+
 def wheels(model) -> list[tuple[int, float, str]]:
     """(contact index, axle position ahead of the centre [m], rail) of every wheel."""
     return [
@@ -318,9 +323,9 @@ def vehicle_runs(runs, lins: list[LinearisedTrack], timing: dict, ballast=None,
 def step_together(loops: list) -> list:
     """Drive the deterioration loops of several sections in step (`predicting`): at each
     round, the vehicle runs every loop asks for (`vehicle_runs`) go in one batch per
-    vehicle model (`trackdyn.simulation.run_batch`), so that the runs of different
-    sections share the solver's vector lanes. A run's result does not depend on the others
-    in its batch, so each loop gives what it gives alone.
+    vehicle model (`trackdyn.simulation.run_batch`, storing only the wheel loads, `KEPT`),
+    so that the runs of different sections share the solver's vector lanes. A run's result
+    does not depend on the others in its batch, so each loop gives what it gives alone.
 
     Parameters
     ----------
@@ -353,7 +358,8 @@ def step_together(loops: list) -> list:
         for model in dict.fromkeys(rounds[i][2][j].model for i, j in runs):
             mine = [(i, j) for i, j in runs if rounds[i][2][j].model == model]
             clock = time.perf_counter()
-            solved = run_batch(*([rounds[i][part][j] for i, j in mine] for part in range(3)))
+            asked_for = ([rounds[i][part][j] for i, j in mine] for part in range(3))
+            solved = run_batch(*asked_for, keep=KEPT)
             share = (time.perf_counter() - clock) / len(mine)  # split evenly
             for (i, j), result in zip(mine, solved, strict=True):
                 answers[i][j] = result

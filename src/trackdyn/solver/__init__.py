@@ -16,8 +16,10 @@ __all__ = ["OUTPUTS", "SOLVERS", "Problem", "solve"]
 SOLVERS = ("central", "reference")
 
 
-def solve(problems, solver: str = "central", *, newton_max_iter: int = 50, advanced=None):
-    """Integrate runs; per run a dict of the `OUTPUTS` arrays or the error that stopped it.
+def solve(problems, solver: str = "central", *, newton_max_iter: int = 50, advanced=None,
+          keep=OUTPUTS):  # fmt: skip
+    """Integrate runs; per run a dict of the `OUTPUTS` arrays (those in ``keep``) or the error
+    that stopped it.
 
     Parameters
     ----------
@@ -31,15 +33,18 @@ def solve(problems, solver: str = "central", *, newton_max_iter: int = 50, advan
         Newton iterations of the wedge friction allowed per step (central scheme).
     advanced : callable, optional
         Called with the number of steps done, as they are done.
+    keep : sequence of str
+        The `OUTPUTS` returned (the central scheme does not store the others).
     """
     if solver == "reference":
-        return [reference.solve(p, advanced) for p in problems]
+        solved = [reference.solve(p, advanced) for p in problems]
+        return [r if isinstance(r, Exception) else {k: r[k] for k in keep} for r in solved]
     groups: dict = {}
     for i, p in enumerate(problems):
         groups.setdefault((p.model.name, p.inputs.grid.size), []).append(i)
     results: list = [None] * len(problems)
     for index in groups.values():
-        batch = central.solve([problems[i] for i in index], newton_max_iter, advanced)
+        batch = central.solve([problems[i] for i in index], newton_max_iter, advanced, keep)
         for i, res in zip(index, batch, strict=True):
             results[i] = res
     return results

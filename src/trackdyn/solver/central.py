@@ -49,6 +49,7 @@ from numba import njit, prange
 from trackdyn.errors import TrackdynInputError
 from trackdyn.solver.lanewise import FASTMATH, LANES, lanewise, load, store, total, vectorised
 from trackdyn.solver.statics import (
+    OUTPUTS,
     Problem,
     contact_table,
     contact_table_force,
@@ -190,22 +191,27 @@ def vehicle_step(p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dw_idx, dw_val, H
 def store_vehicle(z, q1, F, v, ds_idx, ds_val, inv2dt, invdt2, row,
                   out_q, out_v, out_a, out_secondary, out_fw, out_vw):  # fmt: skip
     """Write the step's displacement, velocity, acceleration, secondary displacement and
-    wedge force and velocity to row ``row`` of the outputs; False if ``q0`` is not finite."""
+    wedge force and velocity to row ``row`` of the outputs (those not kept have no
+    columns); False if ``q0`` is not finite."""
     n = q1.shape[0]
     z_bits = z.view(np.int64)
     for i in range(n):
         if z_bits[i] & _EXPONENT == _EXPONENT:
             return False
+    for i in range(out_q.shape[1]):
         out_q[row, i] = z[i]
+    for i in range(out_v.shape[1]):
         out_v[row, i] = (q1[i] - z[n + i]) * inv2dt
+    for i in range(out_a.shape[1]):
         out_a[row, i] = (q1[i] - 2.0 * z[i] + z[n + i]) * invdt2
-    for u in range(ds_idx.shape[0]):
+    for u in range(out_secondary.shape[1]):
         d = 0.0
         for j in range(ds_idx.shape[1]):
             d += ds_val[u, j] * z[ds_idx[u, j]]
         out_secondary[row, u] = d
-    for w in range(F.shape[0]):
+    for w in range(out_fw.shape[1]):
         out_fw[row, w] = F[w]
+    for w in range(out_vw.shape[1]):
         out_vw[row, w] = v[w]
     return True
 
@@ -270,12 +276,15 @@ def advance(
                 out_q, out_v, out_a, out_secondary, out_fw, out_vw,
             ):  # fmt: skip
                 return NOT_FINITE, s
-            for c in range(nc):
+            for c in range(out_wl.shape[1]):
                 dv = 0.0
                 for j in range(dc_idx.shape[1]):
-                    dv += dc_val[c, j] * out_v[stored, dc_idx[c, j]]
+                    i = dc_idx[c, j]
+                    dv += dc_val[c, j] * ((q1[i] - z[n + i]) * inv2dt)  # as `store_vehicle`
                 out_wl[stored, c] = static_load + (fc[c] + contact[c, 0] * dv) / contact[c, 1]
+            for c in range(out_k.shape[1]):
                 out_k[stored, c] = k_in[s, c]
+            for c in range(out_r.shape[1]):
                 out_r[stored, c] = r_in[s, c]
             stored += 1
         to_store -= 1
@@ -706,7 +715,8 @@ def in_lanes(a, take):
     return np.ascontiguousarray(np.moveaxis(a[take], 1, -1))
 
 
-def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> list:
+def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None,
+          keep=OUTPUTS) -> list:  # fmt: skip
     """Integrate runs of one model side by side: one compiled call per block of steps.
 
     The runs go in groups of `LANES` through `advance_groups` (side by side in the vector
@@ -724,11 +734,13 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> 
         Newton iterations allowed per step.
     advanced : callable, optional
         Called with the number of steps done after each block.
+    keep : sequence of str
+        The `OUTPUTS` stored; the others are not written.
 
     Returns
     -------
     list
-        Per run, a dict of the `OUTPUTS` arrays, or the `TrackdynInputError` that
+        Per run, a dict of the kept `OUTPUTS` arrays, or the `TrackdynInputError` that
         stopped it.
     """
     runs = len(problems)
@@ -751,7 +763,8 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> 
             errors[b], status[b, 0] = exc, NOT_STARTED
     lane_z, lane_status = in_lanes(z, take), status[:lanes].reshape(n_groups, LANES, 2)
     rows = np.cumsum([0] + [p.n_store for p in problems])
-    flat = {name: np.empty((rows[-1], w)) for name, w in widths(problems[0].model).items()}
+    flat = {name: np.empty((rows[-1], w if name in keep else 0))
+            for name, w in widths(problems[0].model).items()}  # fmt: skip
     per_run = dict(
         static=np.array([p.model.static_wheel_load for p in problems]),
         y_start=np.array([table_step(track_input(p).grid)[0] for p in problems]),
@@ -818,8 +831,7 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None) -> 
         if advanced is not None:
             advanced(steps)
     return [
-        errors[b] or {name: a[rows[b] : rows[b + 1]] for name, a in flat.items()}
-        for b in range(runs)
+        errors[b] or {name: flat[name][rows[b] : rows[b + 1]] for name in keep} for b in range(runs)
     ]
 
 
