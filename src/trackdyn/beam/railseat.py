@@ -258,7 +258,7 @@ class Windows:
             if self._rest is None:
                 A = self.S[self.kind]
                 A[:, np.arange(self.width), np.arange(self.width)] += k * closed
-                self._inverse = np.linalg.inv(A)
+                self._inverse = _spd_inverses(A)
                 self._version += 1
             else:
                 redo = _flip_supports(self._inverse, self._closed, closed, k, self._flips,
@@ -266,7 +266,7 @@ class Windows:
                 if redo.size:
                     A = self.S[self.kind[redo]]
                     A[:, np.arange(self.width), np.arange(self.width)] += (k * closed)[redo]
-                    self._inverse[redo] = np.linalg.inv(A)
+                    self._inverse[redo] = _spd_inverses(A)
                     self._version[redo] += 1
             self._rest, self._closed = rest, closed
         return self._inverse
@@ -406,6 +406,44 @@ def _flip_supports(inverse, before, after, k, flips, version, max_flips):
     for w in redo:
         flips[w] = 0
     return redo
+
+
+@njit(cache=True, nogil=True)
+def _spd_inverses(A):
+    """Inverses of the symmetric positive definite matrices ``A`` (m, W, W) from their
+    Cholesky factors ``L``: ``A^-1 = L^-T L^-1``, exactly symmetric (each entry formed once
+    and mirrored); twice as fast as LAPACK's general inverse for windows of 21 sleepers."""
+    m, W = A.shape[0], A.shape[1]
+    out = np.empty_like(A)
+    L = np.empty((W, W))
+    for k in range(m):
+        a = A[k]
+        for j in range(W):  # Cholesky, lower triangle
+            s = a[j, j]
+            for p in range(j):
+                s -= L[j, p] * L[j, p]
+            L[j, j] = np.sqrt(s)
+            for i in range(j + 1, W):
+                s = a[i, j]
+                for p in range(j):
+                    s -= L[i, p] * L[j, p]
+                L[i, j] = s / L[j, j]
+        for j in range(W):  # L^-1 in place, a column at a time from the left
+            L[j, j] = 1.0 / L[j, j]
+            for i in range(j + 1, W):
+                s = 0.0
+                for p in range(j, i):
+                    s -= L[i, p] * L[p, j]
+                L[i, j] = s / L[i, i]
+        o = out[k]
+        for i in range(W):
+            for j in range(i, W):
+                s = 0.0
+                for p in range(j, W):
+                    s += L[p, i] * L[p, j]
+                o[i, j] = s
+                o[j, i] = s
+    return out
 
 
 @njit(cache=True, nogil=True)
