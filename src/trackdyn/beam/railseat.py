@@ -535,8 +535,11 @@ def _window_solve(inverse, version, centre, force, start, base_rows, seen, k, g,
                 base[i] = 0.0
             for j in range(W):  # A^-1 is symmetric: its rows as columns, no serial sum
                 f = force[b, j]
+                if f == 0.0:  # a load on a sleeper (the secant's rows) loads one node
+                    continue
+                row = inv[j]
                 for i in range(W):
-                    base[i] += inv[j, i] * f
+                    base[i] += row[i] * f
         for sweep in range(max_sweeps):
             m = 0
             for j in range(W):  # written always, kept when counted: no branch
