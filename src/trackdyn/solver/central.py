@@ -778,6 +778,11 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None,
     block = max(1, min(CHUNK_STEPS, CHUNK_BYTES // step_bytes // runs))
     firsts = range(0, max(p.n_steps for p in problems), block)
 
+    # the lanes' input (k, r), two blocks' worth, allocated once: the next block is sampled
+    # into one while the loop reads the other (`_sampled_blocks`); idle lanes, and the steps
+    # past a lane's last in a block, are not read
+    buffers = np.zeros((2, 2, n_groups, min(block, firsts.stop), nc, LANES))
+
     def sample(first):
         """Track input of the block of steps from ``first`` on (none for stopped runs):
         in the lanes with each lane's number of steps, and of the runs one by one, one
@@ -786,8 +791,8 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None,
         for b, p in enumerate(problems):
             if status[b, 0] == DONE:
                 count[b] = max(min(block, p.n_steps - first), 0)
+        k, r = buffers[first // block % 2]
         shape = (n_groups, int(count[:lanes].max(initial=0)), nc, LANES)
-        k, r = np.zeros(shape), np.zeros(shape)
         table = np.zeros((*shape, grid) if grid else (n_groups, 0, nc, LANES, 0))
         sampled = []
         for b in np.flatnonzero(count).tolist():
