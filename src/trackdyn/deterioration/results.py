@@ -27,14 +27,17 @@ def d1_sd(geometry, extent, segment_length: float):
     segment_length : float
         Segment length [m].
     """
-    x = geometry.distance
-    inside = (x >= extent[0]) & (x <= extent[1])
-    tables = [
-        segment_sd_values(x[inside], longitudinal_level(x[inside], geometry.profile(r)[inside],
-                                                        "D1"), segment_length)
-        for r in RAILS
-    ]  # fmt: skip
+    tables = [rail_d1_sd(geometry.distance, geometry.profile(r), extent, segment_length)
+              for r in RAILS]  # fmt: skip
     return np.array([sd for _, _, sd in tables]), tables[0][0], tables[0][1]
+
+
+def rail_d1_sd(distance, profile, extent, segment_length: float):
+    """`d1_sd` of one rail's ``profile`` at ``distance``: segment starts and ends [m] and
+    the D1 standard deviation of each segment [mm]."""
+    inside = (distance >= extent[0]) & (distance <= extent[1])
+    x = distance[inside]
+    return segment_sd_values(x, longitudinal_level(x, profile[inside], "D1"), segment_length)
 
 
 def trigger_mgt(mgt, sd, threshold: float):

@@ -28,7 +28,7 @@ import numpy as np
 from scipy import signal
 from scipy.optimize import brentq
 
-from trackdyn.deterioration.results import d1_sd
+from trackdyn.deterioration.results import rail_d1_sd
 from trackdyn.track.quality import WAVEBANDS, longitudinal_level, to_uniform_grid
 from trackdyn.track.track import RAILS, Geometry
 
@@ -66,13 +66,12 @@ def tamped_geometry(geometry: Geometry, extent, segment_length: float,
     """
     x = geometry.distance
     profiles = {}
-    for r, rail in enumerate(RAILS):
+    for rail in RAILS:
         z = geometry.profile(rail)
         d1 = longitudinal_level(x, z, "D1")
 
-        def excess(a, z=z, d1=d1, r=r, rail=rail):
-            g = dataclasses.replace(geometry, **{rail: z - a * d1})
-            sd = d1_sd(g, extent, segment_length)[0][r]
+        def excess(a, z=z, d1=d1):
+            sd = rail_d1_sd(x, z - a * d1, extent, segment_length)[2]
             return float(np.sqrt(np.mean(sd**2))) - target * 1e3
 
         if excess(0.0) <= 0:
