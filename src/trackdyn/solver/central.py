@@ -191,27 +191,22 @@ def vehicle_step(p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dw_idx, dw_val, H
 def store_vehicle(z, q1, F, v, ds_idx, ds_val, inv2dt, invdt2, row,
                   out_q, out_v, out_a, out_secondary, out_fw, out_vw):  # fmt: skip
     """Write the step's displacement, velocity, acceleration, secondary displacement and
-    wedge force and velocity to row ``row`` of the outputs (those not kept have no
-    columns); False if ``q0`` is not finite."""
+    wedge force and velocity to row ``row`` of the outputs; False if ``q0`` is not finite."""
     n = q1.shape[0]
     z_bits = z.view(np.int64)
     for i in range(n):
         if z_bits[i] & _EXPONENT == _EXPONENT:
             return False
-    for i in range(out_q.shape[1]):
         out_q[row, i] = z[i]
-    for i in range(out_v.shape[1]):
         out_v[row, i] = (q1[i] - z[n + i]) * inv2dt
-    for i in range(out_a.shape[1]):
         out_a[row, i] = (q1[i] - 2.0 * z[i] + z[n + i]) * invdt2
-    for u in range(out_secondary.shape[1]):
+    for u in range(ds_idx.shape[0]):
         d = 0.0
         for j in range(ds_idx.shape[1]):
             d += ds_val[u, j] * z[ds_idx[u, j]]
         out_secondary[row, u] = d
-    for w in range(out_fw.shape[1]):
+    for w in range(F.shape[0]):
         out_fw[row, w] = F[w]
-    for w in range(out_vw.shape[1]):
         out_vw[row, w] = v[w]
     return True
 
@@ -276,15 +271,12 @@ def advance(
                 out_q, out_v, out_a, out_secondary, out_fw, out_vw,
             ):  # fmt: skip
                 return NOT_FINITE, s
-            for c in range(out_wl.shape[1]):
+            for c in range(nc):
                 dv = 0.0
                 for j in range(dc_idx.shape[1]):
-                    i = dc_idx[c, j]
-                    dv += dc_val[c, j] * ((q1[i] - z[n + i]) * inv2dt)  # as `store_vehicle`
+                    dv += dc_val[c, j] * out_v[stored, dc_idx[c, j]]
                 out_wl[stored, c] = static_load + (fc[c] + contact[c, 0] * dv) / contact[c, 1]
-            for c in range(out_k.shape[1]):
                 out_k[stored, c] = k_in[s, c]
-            for c in range(out_r.shape[1]):
                 out_r[stored, c] = r_in[s, c]
             stored += 1
         to_store -= 1
@@ -735,7 +727,9 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None,
     advanced : callable, optional
         Called with the number of steps done after each block.
     keep : sequence of str
-        The `OUTPUTS` stored; the others are not written.
+        The `OUTPUTS` returned. The lanes do not write the others (they stage each
+        stored step and write the kept arrays' columns); a run one by one writes them
+        all, to arrays of its own (its loop is fastest unguarded).
 
     Returns
     -------
@@ -763,8 +757,12 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None,
             errors[b], status[b, 0] = exc, NOT_STARTED
     lane_z, lane_status = in_lanes(z, take), status[:lanes].reshape(n_groups, LANES, 2)
     rows = np.cumsum([0] + [p.n_store for p in problems])
-    flat = {name: np.empty((rows[-1], w if name in keep else 0))
-            for name, w in widths(problems[0].model).items()}  # fmt: skip
+    # the outputs, rows[b]: rows[b + 1] for run b: of the runs in the lanes (the kept
+    # arrays' columns), and of the runs one by one (all columns; only their rows touched)
+    width = widths(problems[0].model)
+    flat = {name: np.empty((rows[-1], w if name in keep else 0)) for name, w in width.items()}
+    alone_rows = rows[-1] if in_groups < runs else 0
+    flat_one = {name: np.empty((alone_rows, w)) for name, w in width.items()}
     per_run = dict(
         static=np.array([p.model.static_wheel_load for p in problems]),
         y_start=np.array([table_step(track_input(p).grid)[0] for p in problems]),
@@ -825,7 +823,7 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None,
             advance_runs(  # type: ignore[call-arg]
                 *run_mats, per_run["static"][one], k1, r1, table1, per_run["y_start"][one],
                 per_run["y_step"][one], in_start, z[one], per_run["dt"][one], first,
-                per_run["every"][one], newton_max_iter, row0[one], *flat.values(),
+                per_run["every"][one], newton_max_iter, row0[one], *flat_one.values(),
                 status[one],
             )  # fmt: skip
         for b in range(runs):
@@ -836,7 +834,8 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None,
         if advanced is not None:
             advanced(steps)
     return [
-        errors[b] or {name: flat[name][rows[b] : rows[b + 1]] for name in keep} for b in range(runs)
+        errors[b] or {name: out[name][rows[b] : rows[b + 1]] for name in keep}
+        for b, out in enumerate([flat] * in_groups + [flat_one] * (runs - in_groups))
     ]
 
 
