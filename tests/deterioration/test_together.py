@@ -17,7 +17,7 @@ from trackdyn.deterioration import LoopOptions, Traffic, load_law
 from trackdyn.deterioration.runs import Section, SectionTask, run_group, run_section
 from trackdyn.io import write_geometry, write_supports
 from trackdyn.options import RunOptions
-from trackdyn.parallel import groups
+from trackdyn.parallel import groups, run_tasks
 from trackdyn.solver import central
 from trackdyn.track.synthetic import SoftSpot, synthetic_track
 from trackdyn.vehicle.parameters import load_vehicle
@@ -106,3 +106,11 @@ def test_groups_of_tasks(n, together, workers, sizes):
     parts = groups(list(range(n)), together, workers)
     assert [len(p) for p in parts] == sizes
     assert [t for p in parts for t in p] == list(range(n))  # in order, each once
+
+
+def test_groups_go_through_a_cluster_in_order():
+    # a real LocalCluster of 2 workers: 7 tasks, at most 3 together, as 4 groups (2 a
+    # worker); each group's results come back in the tasks' order
+    out = run_tasks(list(range(7)), list, workers=2, together=3)
+    assert out == list(range(7))
+    assert [len(g) for g in groups(list(range(7)), 3, 2)] == [1, 2, 2, 2]

@@ -63,9 +63,11 @@ from trackdyn.solver.statics import (
     widths,
 )
 
-CHUNK_STEPS = 20_000
+CHUNK_STEPS = 8192
 """Steps of a run advanced per compiled call, at most: the input of the next block is
-sampled while the loop runs this one."""
+sampled while the loop runs this one. A block of 8192 steps keeps more of the lanes' input
+in the cache (k and r of a group of 4 contacts, 2 MB each): with 20 000 steps a block, 4
+sections of 500 m through 50 MGT took 3 % longer."""
 
 CHUNK_BYTES = 32 * 2**20
 """Memory of a block's sampled track input, all runs of a batch together, at most [B]
