@@ -10,7 +10,7 @@ through the life-cycle horizon to it through `trackdyn.parallel.run_tasks` with
 ``scheduler=``: the built-in example's traffic, law and 11-DOF model, 300 MGT with the
 life set-up of ``benchmarks/deteriorate.py --life`` (the default threshold maintenance
 policy, 2 mm D1 SD, 200 m segments), as `run_sections` sends them: up to `TOGETHER`
-sections a task, stepped together (`run_group`), as many tasks for each worker.
+sections a task, stepped together (`run_group`), fewer in the last tasks (`groups`).
 
 Each task's cost is the CPU time (user and system, all threads) of the worker process
 while it ran the task, in core-seconds (split evenly between its sections). Reported: wall

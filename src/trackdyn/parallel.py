@@ -165,9 +165,10 @@ def _on_one_core(func, task):
 
 
 def groups(tasks: list, together: int, workers: int) -> list[list]:
-    """``tasks`` in consecutive groups of at most ``together``, as even in size as can be:
-    as few groups as that allows, rounded up to a multiple of ``workers`` (so that each
-    worker gets as many), and no more than there are tasks.
+    """``tasks`` in consecutive groups of at most ``together``. On one worker the groups are
+    full; on more, each group takes about a ``2 workers``-th of the tasks left (guided
+    self-scheduling), so that the groups get smaller towards the end and the last ones, which
+    run while other workers may have nothing left, are short.
 
     Parameters
     ----------
@@ -178,11 +179,13 @@ def groups(tasks: list, together: int, workers: int) -> list[list]:
     workers : int
         Workers the groups go to.
     """
-    n = len(tasks)
-    fewest = math.ceil(n / together)
-    count = min(n, math.ceil(fewest / workers) * workers)
-    edges = [n * g // count for g in range(count + 1)] if n else [0]
-    return [tasks[a:b] for a, b in zip(edges[:-1], edges[1:], strict=True)]
+    out, first = [], 0
+    while first < len(tasks):
+        left = len(tasks) - first
+        size = together if workers == 1 else min(together, math.ceil(left / (2 * workers)))
+        out.append(tasks[first : first + size])
+        first += size
+    return out
 
 
 def _as_list(func):

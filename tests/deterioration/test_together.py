@@ -95,10 +95,11 @@ def test_a_section_whose_files_fail_is_reported_and_the_others_run(tasks):
 @pytest.mark.parametrize(
     ("n", "together", "workers", "sizes"),
     [
-        (20, 4, 2, [3, 3, 4, 3, 3, 4]),  # 5 groups of 4 rounded up to 6: 3 for each worker
-        (4, 4, 1, [4]),
-        (5, 4, 1, [2, 3]),
-        (3, 4, 4, [1, 1, 1]),  # no more groups than tasks
+        # each group about a (2 workers)-th of the tasks left, at most 4: smaller at the end
+        (20, 4, 2, [4, 4, 3, 3, 2, 1, 1, 1, 1]),
+        (4, 4, 1, [4]),  # one worker: full groups
+        (9, 4, 1, [4, 4, 1]),
+        (3, 4, 4, [1, 1, 1]),
         (0, 4, 2, []),
     ],
 )
@@ -109,8 +110,7 @@ def test_groups_of_tasks(n, together, workers, sizes):
 
 
 def test_groups_go_through_a_cluster_in_order():
-    # a real LocalCluster of 2 workers: 7 tasks, at most 3 together, as 4 groups (2 a
-    # worker); each group's results come back in the tasks' order
-    out = run_tasks(list(range(7)), list, workers=2, together=3)
-    assert out == list(range(7))
-    assert [len(g) for g in groups(list(range(7)), 3, 2)] == [1, 2, 2, 2]
+    # a real LocalCluster of 2 workers: 7 tasks, at most 3 together, as 5 groups; each
+    # group's results come back in the tasks' order
+    assert [len(g) for g in groups(list(range(7)), 3, 2)] == [2, 2, 1, 1, 1]
+    assert run_tasks(list(range(7)), list, workers=2, together=3) == list(range(7))
