@@ -16,9 +16,12 @@ def test_contact_input_is_the_sampled_track(lin, model):
     inputs = ContactInput(m, lin)
     lo, hi = lin.track.extent
     reach = [x for axles in m.contact_axles for x in axles]
-    # positions between sleepers, on sleepers and on the geometry's knots, in order
+    # positions between sleepers, on sleepers (the last ones too) and on the geometry's
+    # knots, in order: the sampling goes in runs between sleepers and knots
+    sleepers, knots = lin.track.supports.position, lin.track.geometry.distance
     centre = np.sort(np.r_[np.linspace(lo - min(reach), hi - max(reach), 3001),
-                           lin.track.supports.position[20:30] - reach[0]])  # fmt: skip
+                           sleepers[20:30] - reach[0], knots[40:60] - reach[-1],
+                           sleepers[-3:] - max(reach)])  # fmt: skip
     centre = centre[(centre + min(reach) >= lo) & (centre + max(reach) <= hi)]
     k, r = inputs.linear(centre)
     for c, (rail, axles) in enumerate(zip(m.contact_rails, m.contact_axles, strict=True)):

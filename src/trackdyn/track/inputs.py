@@ -76,14 +76,14 @@ def _interval(x, xp, j):
 
 
 @njit(cache=True, inline="always")
-def _interp(x, xp, fp, j):
-    """``numpy.interp(x, xp, fp)`` operation for operation, in interval ``j``."""
+def _run_end(x, xp, j):
+    """The position up to which (excluded) ``x`` stays in interval ``j`` of ``xp``
+    (`_interval`): the next point, ``x`` itself on the last point, none beyond it."""
     if j < 0:
-        return fp[0]
-    if j >= xp.size - 1 or xp[j] == x:
-        return fp[min(j, xp.size - 1)]
-    slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])
-    return slope * (x - xp[j]) + fp[j]
+        return xp[0]
+    if j < xp.size - 1:
+        return xp[j + 1]
+    return x if j == xp.size - 1 else np.inf
 
 
 @njit(cache=True, nogil=True)
@@ -92,28 +92,47 @@ def _sample(centre, axles, pos, k2, ys, knots, coef, k_out, r_out):
 
     ``axles`` rows: offset ahead of the centre [m], contact, rail, weight (1 / axles of
     the contact). The profile is the cubic spline ``coef`` on ``knots`` per rail, evaluated
-    as scipy's ``PPoly`` does; the operations and their order are those of
-    `LinearisedTrack.sample` followed by the sums of `ContactInput`, so the result is the
-    same to the bit.
+    as scipy's ``PPoly`` does, and the stiffness and loaded deflection are interpolated
+    between the sleepers as ``numpy.interp`` does; the operations and their order are
+    those of `LinearisedTrack.sample` followed by the sums of `ContactInput`, so the result
+    is the same to the bit. The positions (``centre`` increasing) go in runs over which
+    the sleeper interval and the spline's piece stay the same, so that the search, the
+    slopes and the coefficients are found once a run.
     """
+    n, last = centre.size, pos.size - 1
     for a in range(axles.shape[0]):
-        c = int(axles[a, 1])
-        rail = int(axles[a, 2])
+        c, rail, offset, weight = int(axles[a, 1]), int(axles[a, 2]), axles[a, 0], axles[a, 3]
+        kr, yr = k2[rail], ys[rail]
         j = 0
         g = 0
-        for s in range(centre.size):
-            x = centre[s] + axles[a, 0]
+        s = 0
+        while s < n:
+            x = centre[s] + offset
             j = _interval(x, pos, j)
             gi = _interval(x, knots, g)
             g = min(max(gi, 0), knots.size - 2)
-            d = x - knots[g]
-            z = 1.0
-            spline = 0.0
-            for p in range(4):
-                spline = spline + coef[rail, 3 - p, g] * z
-                z *= d
-            k_out[s, c] += _interp(x, pos, k2[rail], j)
-            r_out[s, c] += (spline + _interp(x, pos, ys[rail], j)) * axles[a, 3]
+            top = min(_run_end(x, pos, j), _run_end(x, knots, gi))
+            end = s + 1
+            while end < n and centre[end] + offset < top:
+                end += 1
+            c3, c2, c1, c0 = coef[rail, 3, g], coef[rail, 2, g], coef[rail, 1, g], coef[rail, 0, g]
+            start = knots[g]
+            flat = j < 0 or j >= last  # numpy.interp: the end value
+            i = 0 if j < 0 else min(j, last)
+            xj, kj, yj = pos[i], kr[i], yr[i]
+            sk = 0.0 if flat else (kr[i + 1] - kj) / (pos[i + 1] - xj)
+            sy = 0.0 if flat else (yr[i + 1] - yj) / (pos[i + 1] - xj)
+            for t in range(s, end):
+                x = centre[t] + offset
+                d = x - start
+                spline = (((0.0 + c3) + c2 * d) + c1 * (d * d)) + c0 * (d * d * d)
+                if flat or x == xj:
+                    k_out[t, c] += kj
+                    r_out[t, c] += (spline + yj) * weight
+                else:
+                    k_out[t, c] += sk * (x - xj) + kj
+                    r_out[t, c] += (spline + (sy * (x - xj) + yj)) * weight
+            s = end
 
 
 class ContactInput:
