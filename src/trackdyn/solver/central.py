@@ -760,11 +760,10 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None,
     lane_z, lane_status = in_lanes(z, take), status[:lanes].reshape(n_groups, LANES, 2)
     rows = np.cumsum([0] + [p.n_store for p in problems])
     # the outputs, rows[b]: rows[b + 1] for run b: of the runs in the lanes (the kept
-    # arrays' columns), and of the runs one by one (all columns; only their rows touched)
-    width = widths(problems[0].model)
-    flat = {name: np.empty((rows[-1], w if name in keep else 0)) for name, w in width.items()}
-    alone_rows = rows[-1] if in_groups < runs else 0
-    flat_one = {name: np.empty((alone_rows, w)) for name, w in width.items()}
+    # arrays' columns), and of the runs one by one (all columns), from rows[in_groups] on
+    width, split = widths(problems[0].model), rows[in_groups]
+    flat = {name: np.empty((split, w if name in keep else 0)) for name, w in width.items()}
+    flat_one = {name: np.empty((rows[-1] - split, w)) for name, w in width.items()}
     per_run = dict(
         static=np.array([p.model.static_wheel_load for p in problems]),
         y_start=np.array([table_step(track_input(p).grid)[0] for p in problems]),
@@ -825,7 +824,7 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None,
             advance_runs(  # type: ignore[call-arg]
                 *run_mats, per_run["static"][one], k1, r1, table1, per_run["y_start"][one],
                 per_run["y_step"][one], in_start, z[one], per_run["dt"][one], first,
-                per_run["every"][one], newton_max_iter, row0[one], *flat_one.values(),
+                per_run["every"][one], newton_max_iter, row0[one] - split, *flat_one.values(),
                 status[one],
             )  # fmt: skip
         for b in range(runs):
@@ -835,9 +834,10 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None,
                 errors[b] = stop(problems[b], first + int(at))
         if advanced is not None:
             advanced(steps)
+    where = [(flat, 0)] * in_groups + [(flat_one, split)] * (runs - in_groups)
     return [
-        errors[b] or {name: out[name][rows[b] : rows[b + 1]] for name in keep}
-        for b, out in enumerate([flat] * in_groups + [flat_one] * (runs - in_groups))
+        errors[b] or {name: out[name][rows[b] - at : rows[b + 1] - at] for name in keep}
+        for b, (out, at) in enumerate(where)
     ]
 
 
