@@ -32,3 +32,22 @@ def test_contact_input_is_the_sampled_track(lin, model):
             want_r += rr * (1.0 / len(axles))
         np.testing.assert_array_equal(k[:, c], want_k)
         np.testing.assert_array_equal(r[:, c], want_r)
+
+
+def test_contact_input_of_positions_out_of_order(lin):
+    # the sampling goes in runs of positions that do not go back: positions in any order
+    # give what each gives on its own
+    m = build_model("11dof", load_vehicle("loaded"))
+    inputs = ContactInput(m, lin)
+    lo, hi = lin.track.extent
+    reach = [x for axles in m.contact_axles for x in axles]
+    centre = np.random.default_rng(2).uniform(lo - min(reach), hi - max(reach), 400)
+    k, r = inputs.linear(centre)
+    for i in (0, 1, 57, 399):
+        k1, r1 = inputs.linear(centre[i : i + 1])
+        np.testing.assert_array_equal(k[i], k1[0])
+        np.testing.assert_array_equal(r[i], r1[0])
+    order = np.argsort(centre)
+    ks, rs = inputs.linear(centre[order])
+    np.testing.assert_array_equal(ks, k[order])
+    np.testing.assert_array_equal(rs, r[order])

@@ -95,9 +95,9 @@ def _sample(centre, axles, pos, k2, ys, knots, coef, k_out, r_out):
     as scipy's ``PPoly`` does, and the stiffness and loaded deflection are interpolated
     between the sleepers as ``numpy.interp`` does; the operations and their order are
     those of `LinearisedTrack.sample` followed by the sums of `ContactInput`, so the result
-    is the same to the bit. The positions (``centre`` increasing) go in runs over which
-    the sleeper interval and the spline's piece stay the same, so that the search, the
-    slopes and the coefficients are found once a run.
+    is the same to the bit. The positions go in runs over which the sleeper interval and
+    the spline's piece stay the same (a run's positions do not decrease, as a vehicle's
+    do), so that the search, the slopes and the coefficients are found once a run.
     """
     n, last = centre.size, pos.size - 1
     for a in range(axles.shape[0]):
@@ -112,8 +112,8 @@ def _sample(centre, axles, pos, k2, ys, knots, coef, k_out, r_out):
             gi = _interval(x, knots, g)
             g = min(max(gi, 0), knots.size - 2)
             top = min(_run_end(x, pos, j), _run_end(x, knots, gi))
-            end = s + 1
-            while end < n and centre[end] + offset < top:
+            end = s + 1  # a run: positions that do not go back, below the next point
+            while end < n and centre[end] >= centre[end - 1] and centre[end] + offset < top:
                 end += 1
             c3, c2, c1, c0 = coef[rail, 3, g], coef[rail, 2, g], coef[rail, 1, g], coef[rail, 0, g]
             start = knots[g]
