@@ -65,8 +65,8 @@ class RailBeam:
 
     def padded(self, values):
         """``values`` per sleeper extended by ``half + 1`` copies of the end values."""
-        p = self.half + 1
-        return np.pad(np.asarray(values, dtype=float), (p, p), mode="edge")
+        v, p = np.asarray(values, dtype=float), self.half + 1
+        return np.concatenate([np.full(p, v[0]), v, np.full(p, v[-1])])
 
     @cached_property
     def band(self):
@@ -219,6 +219,8 @@ class Windows:
         self._closed: np.ndarray | None = None  # its closed supports per window
         self._inverse: np.ndarray = np.empty((0, self.width, self.width))  # sized at first use
         self._padded: tuple = ()  # the rest state's values per sleeper, padded
+        self._stiffness = beam.padded(beam.stiffness)  # per sleeper, padded [N/m]
+        self._window_stiffness = self._stiffness[self.index]  # per window and column
 
     def load_vector(self, centre, position, load, closed=None) -> WindowLoads:
         """Point loads placed on the windows: their condensed nodal forces.
@@ -252,9 +254,8 @@ class Windows:
         """
         if self._rest is not rest:
             b = self.beam
-            self._padded = tuple(b.padded(v) for v in (b.stiffness, rest.gap, rest.deflection))
-            k, g, u0 = (v[self.index] for v in self._padded)
-            closed = u0 > g
+            self._padded = (self._stiffness, b.padded(rest.gap), b.padded(rest.deflection))
+            k, closed = self._window_stiffness, _bearing(*self._padded[1:], self.width)
             if self._rest is None:
                 A = self.S[self.kind]
                 A[:, np.arange(self.width), np.arange(self.width)] += k * closed
@@ -406,6 +407,18 @@ def _flip_supports(inverse, before, after, k, flips, version, max_flips):
     for w in redo:
         flips[w] = 0
     return redo
+
+
+@njit(cache=True, nogil=True)
+def _bearing(gap, deflection, width):
+    """The closed supports ``deflection > gap`` of each window, (n, width): window ``i``
+    holds the padded sleepers ``i + 1`` onwards (`Windows.index`)."""
+    n = gap.size - width - 1
+    out = np.empty((n, width), np.bool_)
+    for i in range(n):
+        for j in range(width):
+            out[i, j] = deflection[i + 1 + j] > gap[i + 1 + j]
+    return out
 
 
 @njit(cache=True, nogil=True)
