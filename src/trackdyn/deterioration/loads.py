@@ -29,6 +29,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
+from numba import njit
 
 from trackdyn.errors import TrackdynInputError
 from trackdyn.simulation import run_batch, time_step
@@ -119,17 +120,29 @@ def wheel_forces(run, ballast, model, previous=None) -> list:
         # rows sleeper after sleeper (each wheel over it in turn): one window's rows together
         sleeper = np.repeat(np.arange(n), len(mine))
         at = (pos[:, None] - offsets[None, :]).ravel()  # vehicle centre of each row [m]
-        # the loads of the run's contacts there (not below zero), linear between its stored
-        # samples (evenly spaced, `Run.centre`); beyond them, the nearest
-        where = np.clip((at - centre[0]) / (centre[1] - centre[0]), 0.0, centre.size - 1.0)
-        lo = np.minimum(where.astype(np.int64), centre.size - 2)[:, None]
-        contacts = np.array([c for _, c, _ in mine])[None, :]
-        a, b = (np.maximum(run.wheel_load[i, contacts], 0.0) for i in (lo, lo + 1))
-        row_load = a + (b - a) * (where[:, None] - lo)
+        contacts = np.array([c for _, c, _ in mine])
+        row_load = _row_loads(at, centre[0], centre[1] - centre[0], run.wheel_load, contacts)
         closed = None if previous is None else previous[r][1].closed
         rows = ballast.wheel_forces(r, sleeper, at[:, None] + offsets[None, :], row_load, closed)
         placed.append(([j for j, _, _ in mine], rows))
     return placed
+
+
+@njit(cache=True, nogil=True)
+def _row_loads(at, first, spacing, wheel_load, contacts):
+    """The loads of ``contacts`` (not below zero) with the vehicle centre at each of ``at``
+    [m], linear between the run's stored samples (from ``first``, every ``spacing`` [m],
+    `Run.centre`; beyond them, the nearest), (rows, contacts) [N]."""
+    last = wheel_load.shape[0] - 1
+    out = np.empty((at.size, contacts.size))
+    for b in range(at.size):
+        where = min(max((at[b] - first) / spacing, 0.0), float(last))
+        lo = min(int(where), last - 1)
+        for a in range(contacts.size):
+            x = max(wheel_load[lo, contacts[a]], 0.0)
+            y = max(wheel_load[lo + 1, contacts[a]], 0.0)
+            out[b, a] = x + (y - x) * (where - lo)
+    return out
 
 
 def passage_loads(placed, ballast, state) -> np.ndarray:
