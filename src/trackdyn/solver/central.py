@@ -18,8 +18,9 @@ soon as the states it lands in are the ones it assumed, so the iteration stops t
 starts from the previous step's states and usually needs one solve. The matrices
 ``(I + H diag(C_slope·stick))^-1`` of all ``2^nw`` state combinations are formed once.
 
-A run goes through `advance`; runs of one model, in full groups of `LANES`, side by side
-through `advance_lanes`: each array carries the runs (lanes) along its last, contiguous
+A run goes through `advance`; runs of one model, in groups of `LANES` (the last with idle
+lanes when at least `MIN_LANE_RUNS` are left over), side by side through
+`advance_lanes`: each array carries the runs (lanes) along its last, contiguous
 axis, and each quantity of a step is a tuple of the lanes' values, which LLVM packs into
 vector registers (`trackdyn.solver.lanewise`); a lane's stick/slip states, its Newton
 iteration and its end are selects on its own mask. The sums of each lane are done in
