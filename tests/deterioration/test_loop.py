@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from trackdyn.deterioration import LoopOptions, Traffic, load_law, predict
-from trackdyn.deterioration.loop import shape_change
+from trackdyn.deterioration.loop import shape_change, shape_sleepers
 from trackdyn.errors import TrackdynInputError
 from trackdyn.options import RunOptions
 from trackdyn.track.synthetic import SoftSpot, Transition, VoidedSleepers, synthetic_track
@@ -110,7 +110,8 @@ def test_a_quarter_of_the_default_step_limit_changes_50_mgt_settlement_by_under_
     # change of the settlement's shape to it (chosen with the loads of the step start; the
     # load updates within the step move it by a few per cent at most)
     e, pos = coarse.settlement.values, coarse.sleeper_distance.values
-    change = [shape_change(e[k + 1] - e[k], pos).max() for k in range(1, e.shape[0] - 1)]
+    size = shape_sleepers(pos)
+    change = [shape_change(e[k + 1] - e[k], size).max() for k in range(1, e.shape[0] - 1)]
     assert max(change) <= DEFAULT_LIMIT * 1.05
     assert coarse.step_max_settlement.values[1:].max() > DEFAULT_LIMIT  # even settlement is free
 

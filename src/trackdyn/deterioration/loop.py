@@ -242,12 +242,16 @@ SHAPE_WAVELENGTH = 25.0
 longest wavelength of the D1 band (EN 13848-1), which sets the dynamic wheel loads."""
 
 
-def shape_change(increment, position) -> np.ndarray:
-    """The settlement increment (rail, sleeper) [m] less its moving mean over
-    `SHAPE_WAVELENGTH`, in absolute value [m]."""
+def shape_sleepers(position) -> int:
+    """Sleepers in `SHAPE_WAVELENGTH` at the median spacing of ``position`` [m], odd."""
     spacing = float(np.median(np.diff(position)))
-    size = max(1, int(round(SHAPE_WAVELENGTH / spacing)) | 1)
-    return np.abs(increment - uniform_filter1d(increment, size, axis=-1, mode="nearest"))
+    return max(1, int(round(SHAPE_WAVELENGTH / spacing)) | 1)
+
+
+def shape_change(increment, sleepers: int) -> np.ndarray:
+    """The settlement increment (rail, sleeper) [m] less its moving mean over ``sleepers``
+    (`shape_sleepers`), in absolute value [m]."""
+    return np.abs(increment - uniform_filter1d(increment, sleepers, axis=-1, mode="nearest"))
 
 
 MIN_SHARE = 0.01
@@ -359,6 +363,7 @@ def predicting(track: Track, traffic, law, options=None, *, zones=(), progress=F
     shape = (len(RAILS), pos.size)
     check_zones(zones, (float(pos[0]), float(pos[-1])))
     spacing = float(np.median(np.diff(pos)))
+    mean_over = shape_sleepers(pos)
     rate = rate_field(pos.size, spacing, o.rate_cov, o.rate_correlation_length, o.seed,
                       o.rate_factor)  # fmt: skip
     for z in zones:
@@ -446,7 +451,7 @@ def predicting(track: Track, traffic, law, options=None, *, zones=(), progress=F
                 cycles, peak = _cycles(runs, step_lins, loads, shape)
                 settle = _scaled(rate, acc.prepare(cycles), wear)
                 if span is None:  # the accuracy limit, and at least one train
-                    span = step_size(lambda dm, f=settle: shape_change(f(dm), pos),
+                    span = step_size(lambda dm, f=settle: shape_change(f(dm), mean_over),
                                      target - mgt, limit)  # fmt: skip
                     train = min(shortest, target - mgt)
                     if mgt == fresh:

@@ -218,6 +218,7 @@ class Maintenance:
         self.damage = np.ones(shape)  # rate factor of the tampings' ballast damage [-]
         self.lift = np.zeros(shape)  # lift of the last tamping [m]
         self.since = np.full(shape, np.inf)  # tonnage since it [MGT]
+        self._decay: tuple = (None, None)  # (since, its loosening's decay) of the last factor
         self.done: list[Intervention] = []
         self.expected: set[int] = set()  # segments a step was cut for (`until_due`)
 
@@ -301,7 +302,9 @@ class Maintenance:
         [MGT] (the loosening averaged over the step), per rail and sleeper [-]."""
         tau = self.o.loosening_mgt
         with np.errstate(invalid="ignore"):
-            decay = np.exp(-self.since / tau)
+            if self._decay[0] is not self.since:  # a step's trial tonnages share it
+                self._decay = (self.since, np.exp(-self.since / tau))
+            decay = self._decay[1]
             mean = decay if dm <= 0 else decay * -np.expm1(-dm / tau) * tau / dm
         loose = self.lift / (self.o.lift_reference_mm * 1e-3) * np.nan_to_num(mean)
         return self.damage * (1.0 + loose)
