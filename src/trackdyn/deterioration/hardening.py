@@ -105,7 +105,10 @@ class Power:
             Each class's fraction of the increment [-].
         """
         shape = np.shape(state)
-        each = [n * np.asarray(f, dtype=float) ** (1.0 / self.b) for n, f in classes]
+        # f^(1/b) where the class has cycles only (a wheel loads one rail): n * f^(1/b) is 0
+        # elsewhere all the same
+        each = [n * np.power(np.asarray(f, dtype=float), 1.0 / self.b, out=np.zeros(shape),
+                             where=np.asarray(n) != 0) for n, f in classes]  # fmt: skip
         equivalent = sum(each, np.zeros(shape))
         rate = sum((n for n, _ in classes), np.zeros(shape))
         mix = np.divide(equivalent, rate, out=np.zeros(shape), where=rate > 0) ** self.b
