@@ -335,9 +335,10 @@ def vehicle_runs(runs, lins: list[LinearisedTrack], timing: dict, ballast=None,
 
 def step_together(loops: list) -> list:
     """Drive the deterioration loops of several sections in step (`predicting`): at each
-    round, the vehicle runs every loop asks for (`vehicle_runs`) go in one batch per
-    vehicle model (`trackdyn.simulation.run_batch`, storing only the wheel loads, `KEPT`),
-    so that the runs of different sections share the solver's vector lanes. A run's result
+    round, the vehicle runs every loop asks for (`vehicle_runs`) go in one batch
+    (`trackdyn.simulation.run_batch`, which groups them by model; storing only the wheel
+    loads, `KEPT`), so that the runs of different sections share the solver's vector
+    lanes. A run's result
     does not depend on the others in its batch, so each loop gives what it gives alone.
 
     Parameters
@@ -365,20 +366,16 @@ def step_together(loops: list) -> list:
         resume(i, None)
     while asked:
         rounds, asked = asked, {}
-        answers: dict[int, list] = {i: [None] * len(r[0]) for i, r in rounds.items()}
-        seconds = dict.fromkeys(rounds, 0.0)
-        runs = [(i, j) for i, r in rounds.items() for j in range(len(r[0]))]
-        for model in dict.fromkeys(rounds[i][2][j].model for i, j in runs):
-            mine = [(i, j) for i, j in runs if rounds[i][2][j].model == model]
-            clock = time.perf_counter()
-            asked_for = ([rounds[i][part][j] for i, j in mine] for part in range(3))
-            solved = run_batch(*asked_for, keep=KEPT)
-            share = (time.perf_counter() - clock) / len(mine)  # split evenly
-            for (i, j), result in zip(mine, solved, strict=True):
-                answers[i][j] = result
-                seconds[i] += share
+        pairs = [(i, j) for i, r in rounds.items() for j in range(len(r[0]))]
+        clock = time.perf_counter()
+        solved = run_batch(*([rounds[i][part][j] for i, j in pairs] for part in range(3)),
+                           keep=KEPT)  # fmt: skip
+        share = (time.perf_counter() - clock) / len(pairs)  # split evenly between the runs
+        answers: dict[int, list] = {i: [] for i in rounds}
+        for (i, _), result in zip(pairs, solved, strict=True):
+            answers[i].append(result)
         for i in rounds:
-            resume(i, (answers[i], seconds[i]))
+            resume(i, (answers[i], share * len(answers[i])))
     return results
 
 

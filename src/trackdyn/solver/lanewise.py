@@ -26,9 +26,9 @@ from numba import njit
 LANES = 8
 """Runs of one model in a group of the vector lanes: a compile-time constant, so that an
 operation on a group is a fixed number of instructions (8 doubles: two of the 256-bit
-registers LLVM prefers on AVX-512 machines). Fewer runs than this go one by one: a group
-costs as much with fewer lanes filled (with 4 lanes, 8 runs cost more; see the
-benchmarks)."""
+registers LLVM prefers on AVX-512 machines). A group costs as much with fewer lanes
+filled, so a few runs left over go one by one (`trackdyn.solver.central.MIN_LANE_RUNS`);
+with 4 lanes, 8 runs cost more (see the benchmarks)."""
 
 FASTMATH = {"nnan", "ninf", "nsz", "contract", "afn"}
 """LLVM's fast-math flags of the loops: all but reassociation, so that a run's sums are
