@@ -155,9 +155,6 @@ class WindowLoads:
     ----------
     centre : ndarray, shape (B,)
         Window (sleeper index) of each row.
-    index : ndarray, shape (B, W)
-        Sleeper of each column (``-1`` .. ``n``: beyond the section, the copies of the end
-        sleepers).
     force : ndarray, shape (B, W)
         Condensed nodal forces of the loads [N].
     closed : ndarray of bool, shape (B, W)
@@ -172,7 +169,6 @@ class WindowLoads:
     """
 
     centre: np.ndarray
-    index: np.ndarray
     force: np.ndarray
     closed: np.ndarray
     base: np.ndarray
@@ -238,8 +234,7 @@ class Windows:
         centre = np.asarray(centre)
         force = _condensed_loads(self.x, self.T, self.kind, centre, position, load)
         start = np.ones(force.shape, np.bool_) if closed is None else np.array(closed)
-        index = self.index[centre] - (self.beam.half + 1)
-        return WindowLoads(centre, index, force, start, np.empty(force.shape),
+        return WindowLoads(centre, force, start, np.empty(force.shape),
                            np.zeros(centre.size, np.int64))  # fmt: skip
 
     def _inverses(self, rest: RailRest) -> np.ndarray:
@@ -291,14 +286,15 @@ class Windows:
         Returns
         -------
         index : ndarray, shape (B, W)
-            Sleeper of each column (``loads.index``).
+            Sleeper of each column (``-1`` .. ``n``: beyond the section, the copies of the
+            end sleepers); formed here, not kept with the loads (as large as their forces).
         support_force : ndarray, shape (B, W)
             Total support force, rest state included [N].
         deflection : ndarray, shape (B, W)
             Total rail deflection [m].
         """
         support, y, _ = self._solved(rest, loads, 1, True)
-        return loads.index, support, y
+        return self.index[loads.centre] - (self.beam.half + 1), support, y
 
     def peaks(self, rest: RailRest, loads: WindowLoads, wheels: int):
         """Largest support force of each sleeper over the rows of each wheel, (wheels, n)
