@@ -24,9 +24,10 @@ the whole 300 MGT (about 7 minutes on 1 worker and 4 on 2 on a 2-core machine); 
 (`trackdyn.parallel.keep_freed_memory`); the CPU spent in the kernel is shown apart.
 
 Then, in this process: one 11-DOF run (`simulate`, loaded wagon) over a 500 m section
-(best of 5, before and after), and the deterioration of 4 sections of 500 m through 50 MGT
-(no maintenance) with ``--workers 1`` (one task, the 4 stepped together): a section's
-deterioration in single runs (goal: at most 8) and km x MGT per core-second.
+(best of 5, before and after), and the deterioration of a line of `TOGETHER` (8) sections
+of 500 m through 50 MGT (no maintenance) with ``--workers 1`` (one task, the sections
+stepped together): a section's deterioration in single runs (goal: at most 8) and km x
+MGT per core-second. ``--single`` runs only this part.
 
 Every subprocess is stopped at the end, also on an error or Ctrl-C.
 """
@@ -280,8 +281,8 @@ def single_runs(folder: Path, n: int, length: float, mgt: float, repeat: int) ->
         f"after: {after[0] * 1e3:.0f} ms CPU)\n"
         f"  {n} sections of {length:g} m through {mgt:g} MGT (no maintenance): {cpu:.1f} s CPU, "
         f"{wall:.1f} s wall, {steps:.0f} steps a section\n"
-        f"  a section's deterioration = {cpu / n / run_cpu:.0f} single runs by CPU "
-        f"({wall / n / run_wall:.0f} by wall; goal: at most 8); "
+        f"  a section's deterioration = {cpu / n / run_cpu:.1f} single runs by CPU "
+        f"({wall / n / run_wall:.1f} by wall; goal: at most 8); "
         f"{km * mgt / cpu:.2f} km x MGT per core-second"
     )
 
@@ -291,8 +292,14 @@ def main():
     parser.add_argument("--smoke", action="store_true", help="2 short sections, 3 MGT")
     parser.add_argument("--km", type=int, default=20, help="sections of 1 km in the line")
     parser.add_argument("--mgt", type=float, default=300.0, help="horizon [MGT]")
+    parser.add_argument("--single", action="store_true",
+                        help="only a section's deterioration in single runs (no cluster)")
     opts = parser.parse_args()
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(128 + signal.SIGTERM))
+    if opts.single:
+        with tempfile.TemporaryDirectory() as tmp:
+            single(Path(tmp), opts.smoke)
+        return
     n, length, mgt = (2, 300.0, 3.0) if opts.smoke else (opts.km, 1000.0, opts.mgt)
     km = n * length / 1e3
     timings: dict[int, Timing] = {}
@@ -319,9 +326,14 @@ def main():
               f"MGT: {core_s:.0f} core-s; on 16 workers at a parallel efficiency of "
               f"{efficiency:.2f}: {wall16 / 60:.0f} min (goal: 10 min, {GOAL_CORE_S:.0f} "
               f"core-s; {core_s / GOAL_CORE_S:.1f} times that)")  # fmt: skip
-        n, length, mgt, repeat = (2, 300.0, 1.0, 2) if opts.smoke else (4, 500.0, 50.0, 5)
-        (folder / "single").mkdir()
-        single_runs(folder / "single", n, length, mgt, repeat)
+        single(folder, opts.smoke)
+
+
+def single(folder: Path, smoke: bool) -> None:
+    """`single_runs` on a line of `TOGETHER` sections of 500 m through 50 MGT (one task)."""
+    n, length, mgt, repeat = (2, 300.0, 1.0, 2) if smoke else (TOGETHER, 500.0, 50.0, 5)
+    (folder / "single").mkdir()
+    single_runs(folder / "single", n, length, mgt, repeat)
 
 
 if __name__ == "__main__":
