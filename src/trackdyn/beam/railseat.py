@@ -455,12 +455,13 @@ def _spd_inverses(A):
     return out
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _ldl_solve(c, z, m):
     """Solve ``c[:m, :m] y = z[:m]`` in place (``z`` becomes ``y``) for a symmetric
     quasi-definite ``c`` (a positive definite and a negative definite diagonal block, in
     any order), of which the lower triangle is read: ``L D Lᵀ`` without pivoting, which
-    such a matrix has in every order of its rows (Vanderbei 1995); no allocation.
+    such a matrix has in every order of its rows (Vanderbei 1995); no allocation. Inlined
+    into `_window_solve`, which calls it for a few unknowns per sweep (3 % of its time).
 
     References
     ----------
