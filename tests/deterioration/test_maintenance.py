@@ -1,11 +1,13 @@
 """A track's life: tamping in the loop, and each vehicle's share of the settlement."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from trackdyn.deterioration import LoopOptions, Traffic, load_law, predict
 from trackdyn.deterioration.maintenance import Maintenance, MaintenanceOptions
-from trackdyn.deterioration.results import d1_sd, vehicle_shares
+from trackdyn.deterioration.results import D1Assessment, d1_sd, vehicle_shares
 from trackdyn.options import RunOptions
 from trackdyn.track.quality import longitudinal_level
 from trackdyn.track.synthetic import synthetic_track
@@ -245,3 +247,21 @@ def test_vehicle_shares_add_up_and_follow_the_equivalent_cycles():
     # shares are over the whole section (ends included), the closed form at mid-track
     assert per.iloc[0] / per.iloc[1] == pytest.approx(per_passage[0] / per_passage[1], rel=0.02)
     assert 0.6 * 2 ** (LAW.load_exponent / LAW.beta) < per.iloc[0] / per.iloc[1] < 1024
+
+
+def test_a_d1_assessment_set_up_once_equals_one_set_up_for_each_geometry(track):
+    """`D1Assessment` keeps the filter and segments of a grid while the geometries stay on it
+    (the maintenance's trial steps) and sets them up again on another grid: each D1 SD is
+    the one `d1_sd` gives that geometry alone, to the bit (the same operations)."""
+    g = track.geometry
+    coarse = dataclasses.replace(g, distance=g.distance[::2], left=g.left[::2],
+                                 right=g.right[::2])  # fmt: skip
+    settled = dataclasses.replace(g, left=g.left + 1e-3 * np.sin(g.distance / 7.0))
+    assess = D1Assessment(track.extent, 100.0)
+    for geometry in (g, settled, coarse, g):
+        got, want = assess(geometry), d1_sd(geometry, track.extent, 100.0)
+        for a, b in zip(got, want, strict=True):
+            np.testing.assert_array_equal(a, b)
+    assert not np.array_equal(assess(g)[0], assess(settled)[0])  # not a stale answer
+    assert assess(coarse)[0].shape == assess(g)[0].shape
+    assert not np.array_equal(assess(coarse)[0], assess(g)[0])

@@ -215,6 +215,7 @@ class Zoned:
         self.shape, self.vehicles = shape, vehicles
         held = [(np.flatnonzero(m), law) for m, law in laws]
         self.parts = [(i, memory(law, (shape[0], i.size), vehicles)) for i, law in held if i.size]
+        self._whole = len(self.parts) == 1 and self.parts[0][0].size == shape[-1]  # no zones
 
     @property
     def N(self) -> np.ndarray:
@@ -222,6 +223,11 @@ class Zoned:
         return self._join((i, acc.N) for i, acc in self.parts)
 
     def _join(self, pieces, lead=()) -> np.ndarray:
+        """The zones' values (``pieces``: sleepers, values) on the whole track; a single
+        zone's own values when it holds every sleeper (a track without zones)."""
+        if self._whole:
+            ((_, values),) = pieces
+            return values
         out = np.zeros((*lead, *self.shape))
         for i, values in pieces:
             out[..., i] = values

@@ -493,7 +493,7 @@ def predicting(track: Track, traffic, law, options=None, *, zones=(), progress=F
             if mgt - history["mgt"][-1] > 1e-12 * total:  # not a snapshot just recorded
                 _record(history, mgt, level, state, geometry)
             if maint is not None and mgt < total:
-                due = maint.due(mgt, d1_sd(geometry, track.extent, o.segment_length)[0])
+                due = maint.due(mgt, maint.d1_sd(geometry, track.extent, o.segment_length))
                 if due.size:
                     clock = time.perf_counter()
                     tamped, held = maint.tamp(mgt, due, geometry, track.extent,

@@ -70,7 +70,7 @@ Characterisation of track geometry. CEN, Brussels.
 from __future__ import annotations
 
 import dataclasses
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 from pydantic import (
@@ -86,6 +86,9 @@ from scipy.optimize import brentq
 from trackdyn.options import Strict
 from trackdyn.track.quality import longitudinal_level
 from trackdyn.track.track import RAILS
+
+if TYPE_CHECKING:  # results imports this module
+    from trackdyn.deterioration.results import D1Assessment
 
 DUE_MARGIN = 0.005
 """Fraction under the threshold at which a segment counts as due at a step end [-]: the
@@ -221,6 +224,17 @@ class Maintenance:
         self._decay: tuple = (None, None)  # (since, its loosening's decay) of the last factor
         self.done: list[Intervention] = []
         self.expected: set[int] = set()  # segments a step was cut for (`until_due`)
+        self._assess: D1Assessment | None = None  # the D1 SD's set-up of the latest call
+
+    def d1_sd(self, geometry, extent, segment_length: float) -> np.ndarray:
+        """D1 SD of ``geometry`` (rail, segment) [mm] (`trackdyn.deterioration.results.d1_sd`),
+        its filter and segments set up once for every geometry on the same distances."""
+        from trackdyn.deterioration.results import D1Assessment
+
+        a = self._assess
+        if a is None or (a.extent, a.segment_length) != (tuple(extent), segment_length):
+            a = self._assess = D1Assessment(tuple(extent), segment_length)
+        return a(geometry)[0]
 
     def next_due(self, mgt: float) -> float:
         """Next tonnage of a fixed-policy tamping after ``mgt`` [MGT] (inf: none)."""
@@ -277,15 +291,13 @@ class Maintenance:
         ready = wait <= 0
         if not ready.any():
             return cap
-        from trackdyn.deterioration.results import d1_sd
-
         x, target = geometry.distance, self.threshold
 
         def worst(dm):  # the predicted D1 SD of the segments ready, worst rail [mm]
             e = settle(dm)
             moved = {r: geometry.profile(r) + np.interp(x, self.position, e[k])
                      for k, r in enumerate(RAILS)}  # fmt: skip
-            sd = d1_sd(dataclasses.replace(geometry, **moved), extent, segment_length)[0]
+            sd = self.d1_sd(dataclasses.replace(geometry, **moved), extent, segment_length)
             return np.where(ready, sd.max(axis=0), -np.inf)
 
         def excess(dm):
@@ -344,9 +356,7 @@ class Maintenance:
         held : ndarray
             Tamped sleepers, (2, n) bool.
         """
-        from trackdyn.deterioration.results import d1_sd
-
-        before = d1_sd(geometry, extent, segment_length)[0]
+        before = self.d1_sd(geometry, extent, segment_length)
         profiles, lift = {}, np.zeros((len(RAILS), self.position.size))
         rng = np.random.default_rng((self.o.seed, len(self.done)))
         x = geometry.distance
@@ -372,7 +382,7 @@ class Maintenance:
                 lift[r] = np.maximum(lift[r], ws * (self.o.general_lift_mm * 1e-3 - low) + up)
             profiles[rail] = z
         new = dataclasses.replace(geometry, **profiles)
-        after = d1_sd(new, extent, segment_length)[0]
+        after = self.d1_sd(new, extent, segment_length)
         held = np.broadcast_to(sum(at_sleepers, np.zeros(self.position.size)) > 0, lift.shape)
         renew = np.isin(np.arange(self.starts.size), segments) & (self.count >= self.o.max_tampings)
         renewed = self._weights(_contiguous(np.flatnonzero(renew)), self.position)

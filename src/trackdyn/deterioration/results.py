@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from trackdyn.track.quality import longitudinal_level, segment_sd_values
+from trackdyn.track.quality import LevelFilter, Segments, longitudinal_level
 from trackdyn.track.track import RAILS
 
 HANGING_GAP = 0.1e-3
@@ -27,17 +27,42 @@ def d1_sd(geometry, extent, segment_length: float):
     segment_length : float
         Segment length [m].
     """
-    tables = [rail_d1_sd(geometry.distance, geometry.profile(r), extent, segment_length)
-              for r in RAILS]  # fmt: skip
-    return np.array([sd for _, _, sd in tables]), tables[0][0], tables[0][1]
+    return D1Assessment(extent, segment_length)(geometry)
 
 
-def rail_d1_sd(distance, profile, extent, segment_length: float):
-    """`d1_sd` of one rail's ``profile`` at ``distance``: segment starts and ends [m] and
-    the D1 standard deviation of each segment [mm]."""
-    inside = (distance >= extent[0]) & (distance <= extent[1])
-    x = distance[inside]
-    return segment_sd_values(x, longitudinal_level(x, profile[inside], "D1"), segment_length)
+class D1Assessment:
+    """`d1_sd` of many geometries, the filter and the segments set up once for a grid of
+    distances (`trackdyn.track.quality.LevelFilter`, `Segments`) and kept while the
+    geometries stay on it: the deterioration loop assesses every step's geometry, and
+    the maintenance each trial step's, on the same grid.
+
+    Parameters
+    ----------
+    extent, segment_length
+        As `d1_sd`.
+    """
+
+    def __init__(self, extent, segment_length: float):
+        self.extent, self.segment_length = extent, segment_length
+        self._grid: tuple = ()  # distance, the part inside, its filter and segments
+
+    def _on(self, distance) -> tuple:
+        if not self._grid or not np.array_equal(self._grid[0], distance):
+            inside = (distance >= self.extent[0]) & (distance <= self.extent[1])
+            x = distance[inside]
+            self._grid = (distance, inside, LevelFilter(x, "D1"), Segments(x, self.segment_length))
+        return self._grid
+
+    def rail(self, distance, profile):
+        """`d1_sd` of one rail's ``profile`` at ``distance``: segment starts and ends [m] and
+        the D1 standard deviation of each segment [mm]."""
+        _, inside, level, segments = self._on(distance)
+        return segments.starts, segments.ends, segments.sd(level(profile[inside]))
+
+    def __call__(self, geometry):
+        """As `d1_sd`."""
+        tables = [self.rail(geometry.distance, geometry.profile(r)) for r in RAILS]
+        return np.array([sd for _, _, sd in tables]), tables[0][0], tables[0][1]
 
 
 def trigger_mgt(mgt, sd, threshold: float):
@@ -125,7 +150,8 @@ def make_dataset(track, history, steps, snap_at, record, timing, traffic, law,
     mgt = np.array(history["mgt"])
     pos = track.supports.position
     extent = track.extent
-    quality = [d1_sd(g, extent, options.segment_length) for g in history["geometry"]]
+    assess = D1Assessment(extent, options.segment_length)
+    quality = [assess(g) for g in history["geometry"]]
     sd = np.array([q[0] for q in quality])
     starts, ends = quality[0][1], quality[0][2]
     trigger = trigger_mgt(mgt, sd, options.threshold_sd_mm)

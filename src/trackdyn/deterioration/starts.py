@@ -28,7 +28,7 @@ import numpy as np
 from scipy import signal
 from scipy.optimize import brentq
 
-from trackdyn.deterioration.results import rail_d1_sd
+from trackdyn.deterioration.results import D1Assessment
 from trackdyn.track.quality import WAVEBANDS, longitudinal_level, to_uniform_grid
 from trackdyn.track.track import RAILS, Geometry
 
@@ -66,12 +66,13 @@ def tamped_geometry(geometry: Geometry, extent, segment_length: float,
     """
     x = geometry.distance
     profiles = {}
+    assess = D1Assessment(extent, segment_length)
     for rail in RAILS:
         z = geometry.profile(rail)
         d1 = longitudinal_level(x, z, "D1")
 
         def excess(a, z=z, d1=d1):
-            sd = rail_d1_sd(x, z - a * d1, extent, segment_length)[2]
+            sd = assess.rail(x, z - a * d1)[2]
             return float(np.sqrt(np.mean(sd**2))) - target * 1e3
 
         if excess(0.0) <= 0:

@@ -93,27 +93,50 @@ def longitudinal_level(
     ndarray
         Longitudinal level at ``distance`` [m].
     """
-    x, z = check_series(distance, profile, min_points=3, where=where)
-    at = f"{where}: " if where else ""
-    label, lam_min, lam_max = _band(band)
-    if isinstance(order, bool) or int(order) != order or not 1 <= order <= 10:
-        raise TrackdynInputError(f"order must be an integer in 1..10, got {order!r}")
-    length = x[-1] - x[0]
-    if length < 2.0 * lam_max:
-        raise TrackdynInputError(
-            f"{at}profile length {length:g} m is too short for band {label}: "
-            f"need at least {2.0 * lam_max:g} m (2 x longest wavelength)"
-        )
-    xu, zu, dx, uniform = to_uniform_grid(x, z)
-    if dx >= lam_min / 2.0:
-        raise TrackdynInputError(
-            f"{at}distance spacing {dx:g} m is too coarse for band {label}: "
-            f"need < {lam_min / 2:g} m"
-        )
-    sos, zi = _bandpass(int(order), lam_min, lam_max, dx)
-    padlen = min(zu.size - 1, int(np.ceil(lam_max / dx)))
-    out = _forward_backward(sos, zi, zu, padlen)
-    return out if uniform else np.interp(x, xu, out)
+    return LevelFilter(distance, band, order=order, where=where)(profile)
+
+
+class LevelFilter:
+    """`longitudinal_level` on one grid of distances, set up once (checked, the filter
+    designed, the grid's spacing found) for the profiles of many states of a track: the
+    deterioration loop assesses every step's geometry on the same grid.
+
+    Parameters
+    ----------
+    distance, band, order, where
+        As `longitudinal_level`.
+    """
+
+    def __init__(self, distance, band="D1", *, order: int = 4, where: str = ""):
+        x = check_series(distance, min_points=3, where=where)
+        at = f"{where}: " if where else ""
+        label, lam_min, lam_max = _band(band)
+        if isinstance(order, bool) or int(order) != order or not 1 <= order <= 10:
+            raise TrackdynInputError(f"order must be an integer in 1..10, got {order!r}")
+        length = x[-1] - x[0]
+        if length < 2.0 * lam_max:
+            raise TrackdynInputError(
+                f"{at}profile length {length:g} m is too short for band {label}: "
+                f"need at least {2.0 * lam_max:g} m (2 x longest wavelength)"
+            )
+        xu, _, dx, uniform = to_uniform_grid(x, x)
+        if dx >= lam_min / 2.0:
+            raise TrackdynInputError(
+                f"{at}distance spacing {dx:g} m is too coarse for band {label}: "
+                f"need < {lam_min / 2:g} m"
+            )
+        self.x, self.xu, self.uniform, self.where = x, xu, uniform, where
+        self.sos, self.zi = _bandpass(int(order), lam_min, lam_max, dx)
+        self.padlen = min(xu.size - 1, int(np.ceil(lam_max / dx)))
+
+    def __call__(self, profile) -> np.ndarray:
+        """Longitudinal level of ``profile`` (at the distances) [m]."""
+        z = np.asarray(profile, dtype=float)
+        if z.shape != self.x.shape or not np.isfinite(z).all():
+            check_series(self.x, z, where=self.where)  # refuses it, naming the row
+        zu = z if self.uniform else np.interp(self.xu, self.x, z)
+        out = _forward_backward(self.sos, self.zi, zu, self.padlen)
+        return out if self.uniform else np.interp(self.x, self.xu, out)
 
 
 def segment_sd(distance, level, segment_length: float = 200.0) -> pd.DataFrame:
@@ -148,27 +171,56 @@ def segment_sd_values(x: np.ndarray, v: np.ndarray, segment_length: float):
     """`segment_sd` as arrays (segment starts and ends [m], SD [mm]), of series already
     checked: for callers that assess many profiles (the deterioration loop), without a
     DataFrame each time."""
-    seg = float(segment_length)
-    if not (np.isfinite(seg) and seg > 0):
-        raise TrackdynInputError(
-            f"segment_length must be finite and > 0, got {shown(segment_length)}"
-        )
-    span = x[-1] - x[0]
-    tol = 1e-9 * seg
-    n_full = int(np.floor(span / seg + 1e-9))
-    starts = x[0] + seg * np.arange(n_full)
-    ends = starts + seg
-    if span - n_full * seg > seg / 2.0:
-        starts = np.append(starts, x[0] + n_full * seg)
-        ends = np.append(ends, x[-1])
-    sd = np.full(starts.size, np.nan)
-    for k, (start, end) in enumerate(zip(starts, ends, strict=True)):
-        lo = np.searchsorted(x, start - tol, side="left")
-        last = k == starts.size - 1
-        hi = np.searchsorted(x, end + tol if last else end - tol, side="right" if last else "left")
-        if hi - lo >= 2:
-            sd[k] = np.std(v[lo:hi]) * 1e3
-    return starts, ends, sd
+    segments = Segments(x, segment_length)
+    return segments.starts, segments.ends, segments.sd(v)
+
+
+class Segments:
+    """The segments of `segment_sd` on one grid of distances, found once.
+
+    Parameters
+    ----------
+    x : ndarray
+        Positions, checked: finite and strictly increasing [m].
+    segment_length : float
+        Segment length [m].
+
+    Attributes
+    ----------
+    starts, ends : ndarray
+        Segment bounds [m].
+    """
+
+    def __init__(self, x: np.ndarray, segment_length: float):
+        seg = float(segment_length)
+        if not (np.isfinite(seg) and seg > 0):
+            raise TrackdynInputError(
+                f"segment_length must be finite and > 0, got {shown(segment_length)}"
+            )
+        span = x[-1] - x[0]
+        tol = 1e-9 * seg
+        n_full = int(np.floor(span / seg + 1e-9))
+        starts = x[0] + seg * np.arange(n_full)
+        ends = starts + seg
+        if span - n_full * seg > seg / 2.0:
+            starts = np.append(starts, x[0] + n_full * seg)
+            ends = np.append(ends, x[-1])
+        self.starts, self.ends, self._rows = starts, ends, []
+        for k, (start, end) in enumerate(zip(starts, ends, strict=True)):
+            lo = np.searchsorted(x, start - tol, side="left")
+            last = k == starts.size - 1
+            hi = np.searchsorted(x, end + tol if last else end - tol,
+                                 side="right" if last else "left")  # fmt: skip
+            self._rows.append((int(lo), int(hi)))
+
+    def sd(self, v: np.ndarray) -> np.ndarray:
+        """Standard deviation of ``v`` (at the positions) over each segment [mm] (NaN with
+        fewer than 2 samples)."""
+        sd = np.full(self.starts.size, np.nan)
+        for k, (lo, hi) in enumerate(self._rows):
+            if hi - lo >= 2:
+                sd[k] = np.std(v[lo:hi]) * 1e3
+        return sd
 
 
 @lru_cache(maxsize=64)
