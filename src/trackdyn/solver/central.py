@@ -782,6 +782,10 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None,
     # into one while the loop reads the other (`_sampled_blocks`); idle lanes, and the steps
     # past a lane's last in a block, are not read
     buffers = np.zeros((2, 2, n_groups, min(block, firsts.stop), nc, LANES))
+    # a group's runs are sampled into `staged`, each run's steps in a row, and go into the
+    # lanes' layout in one copy: written run by run, each value there is a cache line of
+    # its own (a row of the layout is `LANES` doubles)
+    staged = np.zeros((2, LANES, min(block, firsts.stop), nc))
 
     def sample(first):
         """Track input of the block of steps from ``first`` on (none for stopped runs):
@@ -794,17 +798,22 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None,
         k, r = buffers[first // block % 2]
         shape = (n_groups, int(count[:lanes].max(initial=0)), nc, LANES)
         table = np.zeros((*shape, grid) if grid else (n_groups, 0, nc, LANES, 0))
-        sampled = []
-        for b in np.flatnonzero(count).tolist():
+
+        def inputs(b):
             p = problems[b]
-            x = p.centre0 + p.speed * p.dt * np.arange(first, first + count[b])
-            if b >= in_groups:
-                sampled.append(p.inputs(x))
-                continue
-            g, n = b // LANES, count[b]
-            k[g, :n, :, b % LANES], r[g, :n, :, b % LANES], tb = p.inputs(x)
-            if grid:
-                table[g, :n, :, b % LANES] = tb
+            return p.inputs(p.centre0 + p.speed * p.dt * np.arange(first, first + count[b]))
+
+        for g in range(n_groups):
+            mine = [b for b in take[g].tolist() if b >= 0 and count[b]]
+            for b in mine:
+                n = count[b]
+                staged[0, b % LANES, :n], staged[1, b % LANES, :n], tb = inputs(b)
+                if grid:
+                    table[g, :n, :, b % LANES] = tb
+            if mine:
+                top = int(count[mine].max())
+                k[g, :top], r[g, :top] = staged[:, :, :top].transpose(0, 2, 3, 1)
+        sampled = [inputs(b) for b in range(in_groups, runs) if count[b]]
         empty = (np.zeros((0, nc)), np.zeros((0, nc)), np.zeros((0, nc, grid)))
         alone = [np.concatenate(a) for a in zip(empty, *sampled, strict=True)]
         in_start = np.cumsum([0, *count[one]])
