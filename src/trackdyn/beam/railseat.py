@@ -296,6 +296,11 @@ class Windows:
         support, y, _ = self._solved(rest, loads, 1, True)
         return self.index[loads.centre] - (self.beam.half + 1), support, y
 
+    def deflection(self, rest: RailRest, loads: WindowLoads) -> np.ndarray:
+        """`solve`'s total rail deflection alone, (B, W) [m] (the beam's secant stiffness
+        needs no more)."""
+        return self._solved(rest, loads, 1, True)[1]
+
     def peaks(self, rest: RailRest, loads: WindowLoads, wheels: int):
         """Largest support force of each sleeper over the rows of each wheel, (wheels, n)
         [N]: row ``b`` is wheel ``b % wheels``'s (0 where no row reaches a sleeper); as

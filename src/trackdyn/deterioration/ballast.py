@@ -346,7 +346,7 @@ class Ballast:
                                                for r in range(len(RAILS))]  # fmt: skip
         k, ys = [], []
         for r, loads in enumerate(self._secant_loads[static_load]):
-            _, _, y = self.force_solve(r, state, loads)
+            y = self.windows[r].deflection(state.rails[r], loads)
             dy = y[:, self.beams[r].half] - np.tile(state.rails[r].deflection, 2)
             k.append(2 * self.delta * static_load / (dy[n:] - dy[:n]))
             ys.append(0.5 * (dy[n:] + dy[:n]))
