@@ -6,7 +6,10 @@ numba thread, a batch of L runs of one model goes as `central.solve` sends it (g
 least `MIN_LANE_RUNS` are left over; fewer one by one, `advance_runs`), timed against
 the per-run loop (`advance`) in the same process, on the same track input (8 Hz, 1 mm, a
 phase per run; input sampled beforehand, every 10th step stored, best of 5). The stored
-arrays of each run are checked to equal the run alone, to the bit.
+arrays of each run are checked to equal the run alone, to the bit. "8 / one" is the time
+of 8 runs storing every output (as a study's runs) over one run's; "wl kept", of 8 runs
+storing only their wheel loads (as the deterioration loop's, `KEPT`) over one run's
+storing everything (as a run alone always does).
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ import time
 import numba
 import numpy as np
 
+from trackdyn.deterioration.loads import KEPT
 from trackdyn.solver.central import (
     DONE,
     LANES,
@@ -30,7 +34,7 @@ from trackdyn.solver.central import (
     step_matrices,
 )
 from trackdyn.solver.lanewise import vectorised
-from trackdyn.solver.statics import widths
+from trackdyn.solver.statics import OUTPUTS, widths
 from trackdyn.vehicle.models import MODELS, build_model
 from trackdyn.vehicle.parameters import load_vehicle
 
@@ -51,9 +55,11 @@ def track_input(model, runs, steps):
     return k, r
 
 
-def outputs(model, rows):
-    """The `OUTPUTS` arrays for ``rows`` stored steps."""
-    return [np.empty((rows, w)) for w in widths(model).values()]
+def outputs(model, rows, keep=None):
+    """The `OUTPUTS` arrays for ``rows`` stored steps (only those in ``keep`` with columns,
+    as `central.solve` gives the lanes; all when None)."""
+    return [np.empty((rows, w if keep is None or name in keep else 0))
+            for name, w in widths(model).items()]  # fmt: skip
 
 
 def per_run(model, k, r, repeat):
@@ -74,9 +80,10 @@ def per_run(model, k, r, repeat):
     return best, out
 
 
-def batch(model, k, r, repeat):
+def batch(model, k, r, repeat, keep=None):
     """Best time [s] of the runs of ``k`` (steps, contacts, runs) as `central.solve` sends
-    them (groups in the lanes, the others one by one), and each run's outputs."""
+    them (groups in the lanes, the others one by one), and each run's outputs; the lanes
+    store only the outputs in ``keep`` (all when None; then no run may go one by one)."""
     steps, nc, runs = k.shape
     take = lane_groups(runs)
     n_groups, grouped = take.shape[0], np.count_nonzero(take >= 0)
@@ -100,7 +107,8 @@ def batch(model, k, r, repeat):
     k_one, r_one = (np.ascontiguousarray(np.moveaxis(a, 2, 0)[one].reshape(-1, nc)) for a in (k, r))
     in_start = np.arange(runs - grouped + 1) * steps
     count = np.where(take >= 0, steps, 0)  # idle lanes: none
-    out = outputs(model, rows * runs)
+    assert keep is None or grouped == runs, "a run one by one writes every output"
+    out = outputs(model, rows * runs, keep)
     best = np.inf
     for _ in range(repeat):
         z = np.zeros((runs, 2 * len(model.dof_names)))
@@ -135,7 +143,7 @@ def main():
     sizes = (1, 2, 4, 8, 16)
     print(f"ns per run-step on one thread, {steps} steps, every {STORE_EVERY}th stored")
     print(f"{'model':<11}{'per run':>9}" + "".join(f"{f'L={n}':>9}" for n in sizes)
-          + f"{'8 / one':>9}{'bitwise':>9}")  # fmt: skip
+          + f"{'8 / one':>9}{'wl kept':>9}{'bitwise':>9}")  # fmt: skip
     for name in MODELS:
         model = build_model(name, vehicle)
         k, r = track_input(model, max(sizes), steps)
@@ -143,12 +151,14 @@ def main():
         batch(model, k[:10, :, :9], r[:10, :, :9], 1)
         one, alone = per_run(model, k[:, :, 0], r[:, :, 0], repeat)
         times = {n: batch(model, k[:, :, :n], r[:, :, :n], repeat) for n in sizes}
+        kept, kept_out = batch(model, k[:, :, :8], r[:, :, :8], repeat, KEPT)
         same = all(
             np.array_equal(a, b) for n in sizes for a, b in zip(times[n][1][0], alone, strict=True)
-        )
+        ) and np.array_equal(kept_out[0][OUTPUTS.index("wl")], alone[OUTPUTS.index("wl")])
         print(f"{name:<11}{one / steps * 1e9:9.0f}"
               + "".join(f"{times[n][0] / steps / n * 1e9:9.0f}" for n in sizes)
-              + f"{times[8][0] / one:9.2f}{'yes' if same else 'NO':>9}")  # fmt: skip
+              + f"{times[8][0] / one:9.2f}{kept / one:9.2f}"
+              + f"{'yes' if same else 'NO':>9}")  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -292,8 +292,11 @@ def main():
     parser.add_argument("--smoke", action="store_true", help="2 short sections, 3 MGT")
     parser.add_argument("--km", type=int, default=20, help="sections of 1 km in the line")
     parser.add_argument("--mgt", type=float, default=300.0, help="horizon [MGT]")
-    parser.add_argument("--single", action="store_true",
-                        help="only a section's deterioration in single runs (no cluster)")
+    parser.add_argument(
+        "--single",
+        action="store_true",
+        help="only a section's deterioration in single runs (no cluster)",
+    )
     opts = parser.parse_args()
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(128 + signal.SIGTERM))
     if opts.single:
