@@ -278,6 +278,30 @@ def test_varandas_cells_that_grow_alike_are_evaluated_once_to_the_same_settlemen
         assert np.all(parts > 0)  # each vehicle's cycles reach cells the other's do not
 
 
+def test_varandas_cells_get_each_wheels_fraction_of_them_below_its_load():
+    """The histogram's growth per MGT of each cell is the sum over the wheels of their
+    cycles per MGT times the fraction of the cell below their load, clipped to [0, 1]:
+    equal, to the bit, to that formula written out in numpy, for loads on, between and
+    below the grid's edges; and loads that are all zero settle nothing (no cell reached)."""
+    from trackdyn.deterioration.accumulation import LOAD_GRID
+
+    law = load_law("varandas")
+    acc, rng = memory(law, (2, 6), 2), np.random.default_rng(3)
+    loads = [np.r_[rng.uniform(0.0, 90e3, 4), 40e3, 0.0] for _ in range(4)]  # 40 kN: an edge
+    cycles = [(v, r, 1e5 * (v + 1) + 7.0 * r, loads[2 * v + r], np.full(6, 1e8))
+              for v in range(2) for r in range(2)]  # fmt: skip
+    acc.prepare(cycles)
+    edges = np.arange(acc.h.shape[-1] + 1) * LOAD_GRID
+    want = np.zeros((2, 2, 6, edges.size - 1))
+    for v, r, w, q, _ in cycles:
+        want[v, r] += w * np.clip((q[:, None] - edges[:-1]) / LOAD_GRID, 0.0, 1.0)
+    np.testing.assert_array_equal(acc._rate, want.sum(axis=0))
+    none = memory(law, (2, 3), 1)
+    increment = none.prepare([(0, r, 1e5, np.zeros(3), np.full(3, 1e8)) for r in range(2)])
+    np.testing.assert_array_equal(increment(1.0), np.zeros((2, 3)))
+    np.testing.assert_array_equal(none.advance(1.0), np.zeros((1, 2, 3)))
+
+
 @pytest.mark.parametrize("name", list(LAWS))
 def test_load_sensitivity_is_the_slope_of_settlement_against_load(name):
     # The loop's stable step rests on d ln e / d ln Q. Measured here through the

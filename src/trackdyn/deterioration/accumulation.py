@@ -139,17 +139,25 @@ class LoadHistory(Hardening):
         edges = np.arange(cells + 1) * LOAD_GRID
         rate = np.zeros((self.vehicles, *shape, cells))
         per_mgt = np.zeros(shape)
-        for v, r, w, q, _ in cycles:
-            rate[v, r] += w * np.clip((q[:, None] - edges[:-1]) / LOAD_GRID, 0.0, 1.0)
+        for _, r, w, _, _ in cycles:
             per_mgt[r] += w
+        if cycles:
+            _cell_rates(rate, *(np.array([c[k] for c in cycles]) for k in range(4)), edges)
         total = rate.sum(axis=0)
         self._rate, self._cycles = total, per_mgt
         a = law.alpha + 1
         weight = np.diff(edges**a) / a
-        on = np.nonzero(total > 0)
-        h, rk, wk, parts, flat = _merged(self.h[on], total[on], weight[on[-1]],
-                                         rate[(slice(None), *on)],
-                                         np.ravel_multi_index(on[:2], shape))  # fmt: skip
+        # the cells with cycles, those that grow alike merged (`_merged_cells`)
+        by_vehicle = rate.reshape(self.vehicles, -1)
+        on, first = _merged_cells(self.h.ravel(), total.ravel(), by_vehicle, cells)
+        kept = on[first]
+        h, rk, parts, flat = (
+            self.h.ravel()[kept],
+            total.ravel()[kept],
+            by_vehicle[:, kept],
+            kept // cells,
+        )
+        wk = np.add.reduceat(weight[on % cells], first) if on.size else np.zeros(0)
         shares = parts / rk
         base = harmonic(h, law.beta)
         scale = law.gamma / law.M
@@ -176,20 +184,6 @@ class LoadHistory(Hardening):
 
     def restart(self, held, mgt: float) -> None:
         self.h = np.where(np.asarray(held)[..., None], self._rate * mgt, self.h)
-
-
-def _merged(h, rate, weight, parts, seat):
-    """The cells of `LoadHistory` in a row of one rail seat that have the same history
-    ``h`` and the same cycles per MGT of each vehicle (``parts``, (vehicles, cells)) made
-    one, their weights added: the cells below every load the seat has carried, most of
-    them, all grow alike. The cells come seat after seat, in order of load. Returns
-    ``h``, ``rate``, ``weight``, ``parts`` and ``seat`` of the merged cells; their increment
-    is the cells' own to round-off."""
-    alike = (
-        (seat[1:] == seat[:-1]) & (h[1:] == h[:-1]) & np.all(parts[:, 1:] == parts[:, :-1], axis=0)
-    )
-    first = np.flatnonzero(np.r_[True, ~alike])
-    return h[first], rate[first], np.add.reduceat(weight, first), parts[:, first], seat[first]
 
 
 def memory(law, shape, vehicles: int) -> Hardening:
@@ -247,6 +241,47 @@ class Zoned:
         """See `Hardening.restart`."""
         for i, acc in self.parts:
             acc.restart(np.asarray(held)[:, i], mgt)
+
+
+@njit(cache=True, nogil=True)
+def _merged_cells(h, total, rate, cells):
+    """The cells of `LoadHistory` with cycles (``total > 0``), as flat indices into its
+    (rails, seats, cells) arrays in order, and where each run of cells that grow alike
+    starts among them: a rail seat's cells in a row with the same history ``h`` and the
+    same cycles per MGT of each vehicle (``rate``, (vehicles, cells of all seats)). The
+    cells below every load a seat has carried, most of them, grow alike, so that a run is
+    evaluated once, its cells' weights added; the increment is the cells' own to
+    round-off. ``h`` and ``total`` are flat, ``cells`` per seat."""
+    on, first = np.empty(total.size, np.int64), np.empty(total.size, np.int64)
+    m, runs, last = 0, 0, -1
+    for i in range(total.size):
+        if not total[i] > 0:
+            continue
+        alike = last >= 0 and i // cells == last // cells and h[i] == h[last]
+        for v in range(rate.shape[0]):
+            alike = alike and rate[v, i] == rate[v, last]
+        if not alike:
+            first[runs] = m
+            runs += 1
+        on[m], m, last = i, m + 1, i
+    return on[:m], first[:runs]
+
+
+@njit(cache=True, nogil=True)
+def _cell_rates(rate, vehicle, rail, weight, load, edges):
+    """Add each wheel's cycles per MGT to the cells of the load grid its rail-seat load
+    reaches, in place: in `LoadHistory`'s ``rate`` (vehicles, rails, seats, cells), wheel
+    ``a`` adds ``weight[a]`` times the fraction of each cell of ``edges`` below its load
+    ``load[a]`` (per seat) [N], clipped to [0, 1]; the cells at or above the load get
+    nothing."""
+    for a in range(load.shape[0]):
+        v, r, w = vehicle[a], rail[a], weight[a]
+        for i in range(load.shape[1]):
+            q, out = load[a, i], rate[v, r, i]
+            for c in range(out.size):
+                if edges[c] >= q:
+                    break
+                out[c] += w * min((q - edges[c]) / LOAD_GRID, 1.0)
 
 
 @njit(cache=True, nogil=True)
