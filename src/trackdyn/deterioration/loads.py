@@ -338,8 +338,8 @@ def step_together(loops: list) -> list:
     round, the vehicle runs every loop asks for (`vehicle_runs`) go in one batch
     (`trackdyn.simulation.run_batch`, which groups them by model; storing only the wheel
     loads, `KEPT`), so that the runs of different sections share the solver's vector
-    lanes. A run's result
-    does not depend on the others in its batch, so each loop gives what it gives alone.
+    lanes. A run's result does not depend on the others in its batch, so each loop gives
+    what it gives alone.
 
     Parameters
     ----------
