@@ -21,6 +21,7 @@ import numba
 import numpy as np
 
 from trackdyn.deterioration.loads import KEPT
+from trackdyn.lanewise import vectorised
 from trackdyn.solver.central import (
     DONE,
     LANES,
@@ -33,7 +34,6 @@ from trackdyn.solver.central import (
     run_matrices,
     step_matrices,
 )
-from trackdyn.solver.lanewise import vectorised
 from trackdyn.solver.statics import OUTPUTS, widths
 from trackdyn.vehicle.models import MODELS, build_model
 from trackdyn.vehicle.parameters import load_vehicle

@@ -7,9 +7,10 @@
   the deflection basin over a voided sleeper of `trackdyn track`
   (`trackdyn.track.analysis.voided_basin`).
 - `trackdyn.beam.railseat`: rail-seat forces of many wheel positions over a section on
-  linear tensionless springs behind gaps (an active-set solve on windows around each
-  wheel, Woodbury updates of the rest state), the inner loop of the deterioration
-  prediction (`trackdyn.deterioration.ballast`).
+  linear tensionless springs behind gaps (an active-set solve of the change from the rest
+  state on a window around each wheel, banded, several wheel positions side by side in
+  the vector lanes), the inner loop of the deterioration prediction
+  (`trackdyn.deterioration.ballast`).
 
 The two solvers stay separate: the static one takes any load-deflection curve and gives
 the whole rail, the windowed one is many times faster for linear springs but solves each

@@ -107,8 +107,8 @@ def wheel_forces(run, ballast, model, previous=None) -> list:
     list of tuple
         Per rail: the indices in `wheels` of its wheels and the rows placed on the beam
         windows (`Ballast.wheel_forces`), one row per wheel over each sleeper (sleeper after
-        sleeper, each of those wheels over it in turn: a beam window's rows follow each
-        other, so its inverse is read once). They do not change as the ballast settles.
+        sleeper, each of those wheels over it in turn). They do not change as the ballast
+        settles.
     """
     pos = ballast.position
     n = pos.size
@@ -117,7 +117,7 @@ def wheel_forces(run, ballast, model, previous=None) -> list:
     for r, rail in enumerate(RAILS):
         mine = [(j, c, x) for j, (c, x, rl) in enumerate(wheels(model)) if rl == rail]
         offsets = np.array([x for _, _, x in mine])
-        # rows sleeper after sleeper (each wheel over it in turn): one window's rows together
+        # rows sleeper after sleeper, each wheel over it in turn
         sleeper = np.repeat(np.arange(n), len(mine))
         at = (pos[:, None] - offsets[None, :]).ravel()  # vehicle centre of each row [m]
         contacts = np.array([c for _, c, _ in mine])

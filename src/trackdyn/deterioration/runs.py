@@ -72,7 +72,8 @@ TOGETHER = 8
 a step of 8 sections runs 8 to 16 vehicles: whole groups of the solver's vector lanes (8
 runs). On a line of 1 km sections on one worker, 8 sections a task took 7 % less time
 than 4 (13.0 s against 13.9 s through 50 MGT) and 25 % more memory (647 MB against 518 MB
-a worker process: about 35 MB per km of section, 25 MB of it the section's beam)."""
+a worker process, when a section's beam held 25 MB per km; its windows no longer keep
+their inverses, 11 MB per km: now 556 MB, about 20 MB per km of section)."""
 
 
 def run_section(task: SectionTask) -> dict:

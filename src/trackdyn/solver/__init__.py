@@ -2,7 +2,7 @@
 
 ``"central"`` is the compiled central-difference scheme (`trackdyn.solver.central`), which
 advances runs of one model side by side in the vector lanes (their operations in
-`trackdyn.solver.lanewise`); ``"reference"`` is scipy's
+`trackdyn.lanewise`); ``"reference"`` is scipy's
 DOP853 at tight tolerance (`trackdyn.solver.reference`), slow, to check a case.
 """
 

@@ -22,7 +22,7 @@ A run goes through `advance`; runs of one model, in groups of `LANES` (the last 
 lanes when at least `MIN_LANE_RUNS` are left over), side by side through
 `advance_lanes`: each array carries the runs (lanes) along its last, contiguous
 axis, and each quantity of a step is a tuple of the lanes' values, which LLVM packs into
-vector registers (`trackdyn.solver.lanewise`); a lane's stick/slip states, its Newton
+vector registers (`trackdyn.lanewise`); a lane's stick/slip states, its Newton
 iteration and its end are selects on its own mask. The sums of each lane are done in
 `advance`'s order and the loops are compiled without reassociation (`FASTMATH`), so a
 run's results in the lanes are those it gives alone, to the bit.
@@ -48,7 +48,7 @@ import numpy as np
 from numba import njit, prange
 
 from trackdyn.errors import TrackdynInputError
-from trackdyn.solver.lanewise import FASTMATH, LANES, lanewise, load, store, total, vectorised
+from trackdyn.lanewise import FASTMATH, LANES, lanewise, load, store, total, vectorised
 from trackdyn.solver.statics import (
     OUTPUTS,
     Problem,
@@ -336,7 +336,7 @@ def advance_lanes(
     ``p_val`` (n, width, LANES), ``k_in`` (steps, contacts, LANES), ``table`` (steps,
     contacts, LANES, grid), ...); the sparse rows' column indices are the model's, shared.
     Lane ``b`` advances ``count[b]`` steps. Each quantity of a step is a tuple of the
-    lanes' values (`trackdyn.solver.lanewise`); stick/slip and the end of a run are
+    lanes' values (`trackdyn.lanewise`); stick/slip and the end of a run are
     selects on each lane's own mask, so that no lane branches on its own. The Newton
     iteration goes on while a running lane's states change; a lane whose iteration fails
     or whose stored displacement is not finite stops (its ``status`` row gets what

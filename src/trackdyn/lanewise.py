@@ -1,14 +1,16 @@
-"""Operations on the runs of a group of the vector lanes, as tuples of `LANES` values.
+"""Operations on a group of the vector lanes, as tuples of `LANES` values.
 
 `trackdyn.solver.central.advance_lanes` holds each quantity of a step (a displacement, a
-contact force, a wedge's state) of its `LANES` runs as one tuple: read with `load` from a
-flat array, one row of `LANES` values after the other, combined by functions made with
-`lanewise`, written back with `store`. A tuple's values are values, not memory: each
-operation reads all its operands before anything is written, so LLVM's SLP vectoriser
-packs the lanes into vector registers. Written as loops over the lanes on arrays instead,
-a lane's loads cannot be moved past the previous lane's stores (numba gives LLVM no way to
-know that two arrays do not overlap), and the step stays scalar. Conditions are written
-as arithmetic where a nested ``if``-expression would compile to branches, lane by lane.
+contact force, a wedge's state) of its `LANES` runs as one tuple, and
+`trackdyn.beam.railseat` each entry of the banded solve of its `LANES` wheel positions:
+read with `load` from a flat array, one row of `LANES` values after the other, combined by
+functions made with `lanewise`, written back with `store`. A tuple's values are values,
+not memory: each operation reads all its operands before anything is written, so LLVM's
+SLP vectoriser packs the lanes into vector registers. Written as loops over the lanes on
+arrays instead, a lane's loads cannot be moved past the previous lane's stores (numba
+gives LLVM no way to know that two arrays do not overlap), and the step stays scalar.
+Conditions are written as arithmetic where a nested ``if``-expression would compile to
+branches, lane by lane.
 
 The SLP vectoriser is off in numba by default (``NUMBA_SLP_VECTORIZE``); `vectorised`
 turns it on while a loop is compiled.
@@ -24,11 +26,12 @@ import numpy as np
 from numba import njit
 
 LANES = 8
-"""Runs of one model in a group of the vector lanes: a compile-time constant, so that an
-operation on a group is a fixed number of instructions (8 doubles: two of the 256-bit
-registers LLVM prefers on AVX-512 machines). A group costs as much with fewer lanes
-filled, so a few runs left over go one by one (`trackdyn.solver.central.MIN_LANE_RUNS`);
-with 4 lanes, 8 runs cost more (see the benchmarks)."""
+"""Runs of one model (or wheel positions on the rail beam) in a group of the vector lanes:
+a compile-time constant, so that an operation on a group is a fixed number of
+instructions (8 doubles: two of the 256-bit registers LLVM prefers on AVX-512 machines).
+A group of runs costs as much with fewer lanes filled, so a few runs left over go one by
+one (`trackdyn.solver.central.MIN_LANE_RUNS`); with 4 lanes, 8 runs cost more (see the
+benchmarks)."""
 
 FASTMATH = {"nnan", "ninf", "nsz", "contract", "afn"}
 """LLVM's fast-math flags of the loops: all but reassociation, so that a run's sums are

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from numba import njit
 
-from trackdyn.solver.lanewise import LANES, lanewise, load, store, total, vectorised
+from trackdyn.lanewise import LANES, lanewise, load, store, total, vectorised
 
 _fma = lanewise("c + a * b")
 _state = lanewise("(c * v > u) + 2 * ((c * v < -d) & (c * v <= u))")
