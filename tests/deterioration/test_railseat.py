@@ -276,3 +276,28 @@ def test_loads_placed_once_give_on_each_state_what_fresh_ones_give():
         sets.append(state.rails[0].closed)
     opened_or_closed = [np.any(p != q) for p, q in zip(sets[:-1], sets[1:], strict=True)]
     assert any(opened_or_closed)
+
+
+def test_wheel_positions_that_do_not_settle_are_refused(monkeypatch):
+    """A wheel position whose closed supports still change after `MAX_SWEEPS` solves is
+    refused with one line that counts them. Allowed one solve, on rough ballast, the rows
+    started from their answer (found with the default allowance) settle in it and those
+    started from every support closed do not (every answer has supports open, where the
+    rail lifts off beyond the wheels): the count is the latter's, every third row."""
+    from trackdyn.beam import railseat
+    from trackdyn.errors import TrackdynInputError
+
+    b = ballast()
+    state = b.state(np.random.default_rng(15).uniform(0.0, 1.5e-3, (2, b.position.size)))
+    centre = np.arange(b.position.size)
+    at, loads = b.position[:, None] + WHEELS, np.tile(LOADS, (centre.size, 1))
+    answer = b.wheel_forces(0, centre, at, loads)
+    b.force_solve(0, state, answer)
+    assert not np.any(answer.closed.all(axis=1))
+    start = answer.closed.copy()
+    start[::3] = True
+    monkeypatch.setattr(railseat, "MAX_SWEEPS", 1)
+    count = centre[::3].size
+    with pytest.raises(TrackdynInputError, match=rf"^rail-seat forces: the contact of {count} "
+                       r"wheel positions did not settle in 1 iterations$"):  # fmt: skip
+        b.force_solve(0, state, b.wheel_forces(0, centre, at, loads, closed=start))
