@@ -12,10 +12,10 @@ length of 0.8 m, ``e^(-x/L_c)``). Each wheel position is a banded system of the
 window's deflections and rotations at its ``2 half + 1`` sleepers, solved for one set of
 closed supports at a time (closed where the rail reaches the ballast, open elsewhere)
 until the set no longer changes, starting from the set the same row had in its latest
-solve (the ballast changes little between solves); all positions are solved in one compiled
-loop, `LANES` of them side by side in the vector lanes (`trackdyn.lanewise`). The
-section is extended beyond its ends by copies of its end sleepers, as the track goes on
-beyond a section.
+solve (the ballast changes little between solves); all positions are solved in one
+compiled loop, `LANES` of them side by side in the vector lanes (`trackdyn.lanewise`).
+The section is extended beyond its ends by copies of its end sleepers, as the track goes
+on beyond a section.
 
 References
 ----------
