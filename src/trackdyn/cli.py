@@ -58,15 +58,16 @@ OverwriteOption = Annotated[
 
 
 def refuse_bad_input(command):
-    """Turn TrackdynInputError into a one-line message and exit code 2."""
+    """Turn a `TrackdynError` (refused input, a numerical failure) into a one-line message
+    and exit code 2."""
 
     @functools.wraps(command)
     def wrapper(*args, **kwargs):
-        from trackdyn.errors import TrackdynInputError
+        from trackdyn.errors import TrackdynError
 
         try:
             return command(*args, **kwargs)
-        except TrackdynInputError as exc:
+        except TrackdynError as exc:
             print(f"error: {exc}", file=sys.stderr)
             raise typer.Exit(2) from None
 

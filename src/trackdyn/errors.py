@@ -1,18 +1,107 @@
-"""The one exception type for bad input, and the checks that raise it."""
+"""The one failure type of trackdyn (a `Status` and a one-line message), the exception for
+bad input, and the checks that raise it.
 
+Every failure that a caller reports and goes on from (a run of a study, a section of a
+line, a model run of a fit, a lost worker) comes back as a `Failure`; raised, it is a
+`TrackdynError`: `TrackdynInputError` for input that trackdyn refuses,
+`TrackdynNumericalError` for a computation that did not succeed on input it accepted.
+"""
+
+from __future__ import annotations
+
+import enum
 import os
 import traceback
 from contextlib import contextmanager
+from dataclasses import dataclass
 
 import numpy as np
 
 
-class TrackdynInputError(ValueError):
+class Status(enum.Enum):
+    """Why something did not give a result."""
+
+    INPUT_REFUSED = "input refused"
+    NEWTON_DIVERGED = "Newton iteration did not converge"
+    NON_FINITE = "non-finite result"
+    SETTLEMENT_RAN_AWAY = "settlement ran away"
+    WORKER_LOST = "worker lost"
+    FAILED = "failed"  # anything else: a bug, reported with where it was raised
+
+
+class TrackdynError(Exception):
+    """A failure of trackdyn with its `Status`; the message is one line.
+
+    The CLI prints it without a traceback and exits with code 2.
+    """
+
+    status: Status = Status.FAILED
+
+    def __init__(self, message: str, status: Status | None = None):
+        super().__init__(message)
+        if status is not None:
+            self.status = status
+
+    def __reduce__(self):  # keep the status through pickling (Dask workers)
+        return type(self), (str(self), self.status)
+
+
+class TrackdynInputError(TrackdynError, ValueError):
     """Input that trackdyn refuses.
 
-    The message is one line and names the file, row or parameter at fault. The CLI prints
-    it without a traceback and exits with code 2.
+    The message is one line and names the file, row or parameter at fault.
     """
+
+    status = Status.INPUT_REFUSED
+
+
+class TrackdynNumericalError(TrackdynError):
+    """A computation that did not succeed on input trackdyn accepted (`Status`:
+    ``NEWTON_DIVERGED``, ``NON_FINITE``, ``SETTLEMENT_RAN_AWAY``)."""
+
+
+@dataclass(frozen=True)
+class Failure:
+    """What a run, a section or a task gave instead of a result.
+
+    Parameters
+    ----------
+    status : Status
+        Why it failed.
+    message : str
+        One line: what failed, and where.
+    """
+
+    status: Status
+    message: str
+
+    @classmethod
+    def of(cls, exc: BaseException) -> Failure:
+        """The failure an exception stands for (its status; `FAILED` for a non-trackdyn
+        exception, whose message then names its type and where it was raised)."""
+        if isinstance(exc, TrackdynError):
+            return cls(exc.status, str(exc))
+        return cls(Status.FAILED, error_message(exc))
+
+    def named(self, name: str) -> Failure:
+        """The same failure, its message prefixed with ``name`` (``"section a: ..."``)."""
+        return Failure(self.status, f"{name}: {self.message}")
+
+    def error(self) -> TrackdynError:
+        """The exception to raise for it: `TrackdynInputError` for refused input,
+        `TrackdynNumericalError` for a numerical failure, else `TrackdynError`."""
+        if self.status is Status.INPUT_REFUSED:
+            return TrackdynInputError(self.message)
+        if self.status in NUMERICAL:
+            return TrackdynNumericalError(self.message, self.status)
+        return TrackdynError(self.message, self.status)
+
+    def __str__(self) -> str:
+        return self.message
+
+
+NUMERICAL = frozenset({Status.NEWTON_DIVERGED, Status.NON_FINITE, Status.SETTLEMENT_RAN_AWAY})
+"""The statuses of `TrackdynNumericalError`."""
 
 
 def shown(value) -> str:
@@ -101,10 +190,11 @@ def error_message(exc: BaseException) -> str:
     exc : BaseException
         The exception caught.
     """
-    if isinstance(exc, TrackdynInputError):
+    if isinstance(exc, TrackdynError):
         return str(exc)
-    last = traceback.extract_tb(exc.__traceback__)[-1]
-    return f"{type(exc).__name__}: {exc} ({last.filename}:{last.lineno})"
+    frames = traceback.extract_tb(exc.__traceback__)
+    where = f" ({frames[-1].filename}:{frames[-1].lineno})" if frames else ""
+    return f"{type(exc).__name__}: {exc}{where}"
 
 
 @contextmanager
