@@ -27,8 +27,35 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
     arrays of a solver (`trackdyn.solver`), finite.
     """
     dofs = list(model.dof_names)
+    data = _variables(out)
+    coords = _coordinates(model, time, centre)
+    _add_side_means(data, coords, model, out["wl"])
+    for name, units in BODY_MOTIONS.items():
+        if name in dofs:
+            motion = name.replace("_", " ")
+            data[f"{name}_acceleration"] = (
+                "time",
+                out["a"][:, dofs.index(name)],
+                {"units": units, "long_name": f"{motion} acceleration"},
+            )
+    return xr.Dataset(
+        data,
+        coords=coords,
+        attrs={
+            "model": model.name,
+            "vehicle": vehicle.name,
+            "speed_m_per_s": speed,
+            "time_step_s": dt,
+            "static_wheel_load_N": model.static_wheel_load,
+            "track": "nonlinear (5.14)" if nonlinear else "linearised (5.10-5.11)",
+        },
+    )
+
+
+def _variables(out) -> dict[str, tuple]:
+    """The Dataset's variables from a solver's `OUTPUTS` arrays: (dims, values, attrs)."""
     wedge = ("time", "wedge")
-    data: dict[str, tuple] = {
+    return {
         "wheel_load": (
             ("time", "contact"),
             out["wl"],
@@ -91,7 +118,13 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
             {"long_name": "generalised acceleration (units: dof_units/s^2)"},
         ),
     }
-    coords = {
+
+
+def _coordinates(model, time, centre) -> dict[str, tuple]:
+    """The Dataset's coordinates: time and vehicle position of each stored step, and the
+    model's contacts, suspensions, wedges and degrees of freedom."""
+    dofs = list(model.dof_names)
+    return {
         "time": ("time", time, {"units": "s", "long_name": "time from the start of the run"}),
         "distance": ("time", centre, {"units": "m", "long_name": "vehicle centre position"}),
         "contact": ("contact", list(model.contact_names), {"long_name": "wheel contact"}),
@@ -118,6 +151,11 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
             {"long_name": "unit of the degree of freedom's displacement"},
         ),
     }
+
+
+def _add_side_means(data, coords, model, wheel_load) -> None:
+    """``wheel_load_side_mean`` and the side coordinates, for a model with single-wheel
+    contacts grouped by bogie side (nothing for the others)."""
     sides = [s for s in dict.fromkeys(model.contact_sides) if s]
     if sides:
         coords["contact_side"] = (
@@ -127,7 +165,7 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
         )
         coords["side"] = ("side", sides, {"long_name": "bogie side"})
         load = xr.DataArray(
-            out["wl"], dims=("time", "contact"), coords={"contact_side": coords["contact_side"]}
+            wheel_load, dims=("time", "contact"), coords={"contact_side": coords["contact_side"]}
         )
         side_mean = load.groupby("contact_side").mean().rename(contact_side="side")
         data["wheel_load_side_mean"] = (
@@ -135,26 +173,6 @@ def make_dataset(model, vehicle, time, centre, out, *, dt, speed, nonlinear) -> 
             side_mean.sel(side=sides).values,
             {"units": "N", "long_name": "mean wheel load of each bogie side"},
         )
-    for name, units in BODY_MOTIONS.items():
-        if name in dofs:
-            motion = name.replace("_", " ")
-            data[f"{name}_acceleration"] = (
-                "time",
-                out["a"][:, dofs.index(name)],
-                {"units": units, "long_name": f"{motion} acceleration"},
-            )
-    return xr.Dataset(
-        data,
-        coords=coords,
-        attrs={
-            "model": model.name,
-            "vehicle": vehicle.name,
-            "speed_m_per_s": speed,
-            "time_step_s": dt,
-            "static_wheel_load_N": model.static_wheel_load,
-            "track": "nonlinear (5.14)" if nonlinear else "linearised (5.10-5.11)",
-        },
-    )
 
 
 def dominant_frequency(signal: np.ndarray, dt: float) -> float:

@@ -342,6 +342,106 @@ _count_changes = lanewise("m + (1 if n != c else 0)")
 """Operations of `_window_solve` on the tuples of its lanes (`trackdyn.lanewise`)."""
 
 
+@njit(cache=True, inline="always")
+def _fill_lanes(b0, band, kind, centre, force, start, k, g, u0, lanes, kinds):
+    """Put rows ``b0`` onwards of `_window_solve` into the lanes' values ``lanes`` = (band
+    of K, forces, and per sleeper its stiffness, gap, rest deflection, rest and trial sets);
+    the band only where a lane's window stiffness (``kinds``) changes; past the last row,
+    the last row again."""
+    a, f, kb, gb, ub, c0, cl = lanes
+    B, size = force.shape
+    W = size // 2
+    for lane in range(LANES):
+        b = min(b0 + lane, B - 1)
+        if kinds[lane] != kind[centre[b]]:
+            kinds[lane] = kind[centre[b]]
+            kw = band[kinds[lane]]
+            for j in range(size):
+                for o in range(4):
+                    a[(4 * j + o) * LANES + lane] = kw[j, o]
+        for j in range(size):
+            f[j * LANES + lane] = force[b, j]
+        first = centre[b] + 1
+        for j in range(W):
+            q = j * LANES + lane
+            kb[q], gb[q], ub[q] = k[first + j], g[first + j], u0[first + j]
+            c0[q] = 1.0 if ub[q] > gb[q] else 0.0
+            cl[q] = 1.0 if start[b, j] else 0.0
+
+
+@njit(cache=True, inline="always")
+def _solve_lanes(lanes, low, vb, none):
+    """One solve of the lanes' rows on their trial sets of closed supports: ``L D Lᵀ``
+    factored a column at a time from the three before it with the forward solve in the same
+    pass (into ``low``), then one pass back; the change of each sleeper's deflection into
+    ``vb``."""
+    a, f, kb, gb, ub, c0, cl = lanes
+    size = f.size // LANES
+    zero = load(none, 0)
+    # columns j - 1, j - 2, j - 3 (last digit): L below the diagonal (m1, m2, m3, those
+    # reaching row j onwards), D (d), z (y)
+    m11 = m21 = m31 = d1 = m22 = m32 = d2 = m33 = d3 = zero
+    y1 = y2 = y3 = zero
+    for j in range(size):
+        if j % 2 == 0:  # a deflection: its support, when closed
+            kj, cj = load(kb, j // 2), load(cl, j // 2)
+            diagonal = _with_support(load(a, 4 * j), cj, kj)
+            r = _load_change(cj, load(f, j), load(gb, j // 2), kj, load(ub, j // 2),
+                             load(c0, j // 2))  # fmt: skip
+        else:
+            diagonal, r = load(a, 4 * j), load(f, j)
+        e1, e2, e3 = _product(m11, d1), _product(m22, d2), _product(m33, d3)
+        d = _minus_three(diagonal, m11, e1, m22, e2, m33, e3)
+        q = _reciprocal(d)
+        n1 = _product(_minus_two(load(a, 4 * j + 1), m21, e1, m32, e2), q)
+        n2 = _product(_minus_one(load(a, 4 * j + 2), m31, e1), q)
+        n3 = _product(load(a, 4 * j + 3), q)
+        y = _minus_three(r, m11, y1, m22, y2, m33, y3)
+        store(low, 4 * j, n1)
+        store(low, 4 * j + 1, n2)
+        store(low, 4 * j + 2, n3)
+        store(low, 4 * j + 3, _product(y, q))
+        m33, d3 = m32, d2
+        m22, m32, d2 = m21, m31, d1
+        m11, m21, m31, d1 = n1, n2, n3, d
+        y3, y2, y1 = y2, y1, y
+    v1 = v2 = v3 = zero
+    for j in range(size - 1, -1, -1):
+        v = _minus_three(load(low, 4 * j + 3), load(low, 4 * j), v1,
+                         load(low, 4 * j + 1), v2, load(low, 4 * j + 2), v3)  # fmt: skip
+        if j % 2 == 0:
+            store(vb, j // 2, v)
+        v3, v2, v1 = v2, v1, v
+
+
+@njit(cache=True, inline="always")
+def _finish_rows(b0, lanes, vb, start, centre, half, wheels, rows, force_b, out):
+    """The solved rows ``b0`` onwards of the lanes: each row's closed set into ``start``,
+    its support forces and deflections into ``out`` = (support, deflection, peak) (rows
+    only when ``rows``), and its forces into each sleeper's peak of its wheel."""
+    a, f, kb, gb, ub, c0, cl = lanes
+    support, deflection, peak = out
+    B, W = start.shape
+    n = peak.shape[1]
+    for lane in range(min(LANES, B - b0)):
+        b = b0 + lane
+        for j in range(W):
+            q = j * LANES + lane
+            start[b, j] = cl[q] > 0.5
+            force_b[j] = kb[q] * max(ub[q] + vb[q] - gb[q], 0.0)
+        if rows:
+            for j in range(W):
+                deflection[b, j] = ub[j * LANES + lane] + vb[j * LANES + lane]
+                support[b, j] = force_b[j]
+        # the peaks in the section, from the forces formed above: a loop over two slices
+        # vectorises (LLVM checks that they do not overlap)
+        lo, hi = max(0, half - centre[b]), min(W, n + half - centre[b])
+        pk = peak[b % wheels, centre[b] - half + lo : centre[b] - half + hi]
+        fb = force_b[lo:hi]
+        for j in range(hi - lo):
+            pk[j] = max(pk[j], fb[j])
+
+
 @njit(cache=True, nogil=True, fastmath=FASTMATH, error_model="numpy")
 def _window_solve(band, kind, centre, force, start, k, g, u0, max_sweeps, half, wheels,
                   rows):  # fmt: skip
@@ -391,64 +491,16 @@ def _window_solve(band, kind, centre, force, start, k, g, u0, max_sweeps, half, 
     kb, gb, ub = np.empty(W * LANES), np.empty(W * LANES), np.empty(W * LANES)
     c0, cl, vb = np.empty(W * LANES), np.empty(W * LANES), np.empty(W * LANES)
     low = np.empty(size * 4 * LANES)  # per column j: L[j+1, j], L[j+2, j], L[j+3, j], z_j / D_j
+    lanes = (a, f, kb, gb, ub, c0, cl)
     none, nothing = np.zeros(LANES), np.zeros(LANES, np.int64)
     moved = np.empty(LANES, np.int64)
     kinds = np.full(LANES, -1)  # the window stiffness in each lane's band
     force_b = np.empty(W)
     unsettled = 0
     for b0 in range(0, B, LANES):
-        for lane in range(LANES):
-            b = min(b0 + lane, B - 1)
-            if kinds[lane] != kind[centre[b]]:
-                kinds[lane] = kind[centre[b]]
-                kw = band[kinds[lane]]
-                for j in range(size):
-                    for o in range(4):
-                        a[(4 * j + o) * LANES + lane] = kw[j, o]
-            for j in range(size):
-                f[j * LANES + lane] = force[b, j]
-            first = centre[b] + 1
-            for j in range(W):
-                q = j * LANES + lane
-                kb[q], gb[q], ub[q] = k[first + j], g[first + j], u0[first + j]
-                c0[q] = 1.0 if ub[q] > gb[q] else 0.0
-                cl[q] = 1.0 if start[b, j] else 0.0
+        _fill_lanes(b0, band, kind, centre, force, start, k, g, u0, lanes, kinds)
         for sweep in range(max_sweeps):
-            zero = load(none, 0)
-            # columns j - 1, j - 2, j - 3 (last digit): L below the diagonal (m1, m2, m3, those
-            # reaching row j onwards), D (d), z (y)
-            m11 = m21 = m31 = d1 = m22 = m32 = d2 = m33 = d3 = zero
-            y1 = y2 = y3 = zero
-            for j in range(size):
-                if j % 2 == 0:  # a deflection: its support, when closed
-                    kj, cj = load(kb, j // 2), load(cl, j // 2)
-                    diagonal = _with_support(load(a, 4 * j), cj, kj)
-                    r = _load_change(cj, load(f, j), load(gb, j // 2), kj, load(ub, j // 2),
-                                     load(c0, j // 2))  # fmt: skip
-                else:
-                    diagonal, r = load(a, 4 * j), load(f, j)
-                e1, e2, e3 = _product(m11, d1), _product(m22, d2), _product(m33, d3)
-                d = _minus_three(diagonal, m11, e1, m22, e2, m33, e3)
-                q = _reciprocal(d)
-                n1 = _product(_minus_two(load(a, 4 * j + 1), m21, e1, m32, e2), q)
-                n2 = _product(_minus_one(load(a, 4 * j + 2), m31, e1), q)
-                n3 = _product(load(a, 4 * j + 3), q)
-                y = _minus_three(r, m11, y1, m22, y2, m33, y3)
-                store(low, 4 * j, n1)
-                store(low, 4 * j + 1, n2)
-                store(low, 4 * j + 2, n3)
-                store(low, 4 * j + 3, _product(y, q))
-                m33, d3 = m32, d2
-                m22, m32, d2 = m21, m31, d1
-                m11, m21, m31, d1 = n1, n2, n3, d
-                y3, y2, y1 = y2, y1, y
-            v1 = v2 = v3 = zero
-            for j in range(size - 1, -1, -1):
-                v = _minus_three(load(low, 4 * j + 3), load(low, 4 * j), v1,
-                                 load(low, 4 * j + 1), v2, load(low, 4 * j + 2), v3)  # fmt: skip
-                if j % 2 == 0:
-                    store(vb, j // 2, v)
-                v3, v2, v1 = v2, v1, v
+            _solve_lanes(lanes, low, vb, none)
             changes = load(nothing, 0)
             for i in range(W):
                 now = _bears(load(gb, i), load(ub, i), load(vb, i))
@@ -460,21 +512,6 @@ def _window_solve(band, kind, centre, force, start, k, g, u0, max_sweeps, half, 
             if sweep == max_sweeps - 1:
                 for lane in range(min(LANES, B - b0)):
                     unsettled += moved[lane] > 0
-        for lane in range(min(LANES, B - b0)):
-            b = b0 + lane
-            for j in range(W):
-                q = j * LANES + lane
-                start[b, j] = cl[q] > 0.5
-                force_b[j] = kb[q] * max(ub[q] + vb[q] - gb[q], 0.0)
-            if rows:
-                for j in range(W):
-                    deflection[b, j] = ub[j * LANES + lane] + vb[j * LANES + lane]
-                    support[b, j] = force_b[j]
-            # the peaks in the section, from the forces formed above: a loop over two slices
-            # vectorises (LLVM checks that they do not overlap)
-            lo, hi = max(0, half - centre[b]), min(W, n + half - centre[b])
-            pk = peak[b % wheels, centre[b] - half + lo : centre[b] - half + hi]
-            fb = force_b[lo:hi]
-            for j in range(hi - lo):
-                pk[j] = max(pk[j], fb[j])
+        _finish_rows(b0, lanes, vb, start, centre, half, wheels, rows, force_b,
+                     (support, deflection, peak))  # fmt: skip
     return support, deflection, peak, unsettled
