@@ -42,6 +42,7 @@ from pydantic import (
 from trackdyn.errors import TrackdynInputError, unknown
 from trackdyn.io import read_toml
 from trackdyn.limits import MAX_SPEED_KMH
+from trackdyn.track.support import DELTA
 from trackdyn.vehicle.parameters import load_vehicle, vehicle_source
 
 
@@ -90,7 +91,7 @@ class RunOptions(Strict):
     speed_kmh: float = Field(60.0, gt=0, le=MAX_SPEED_KMH)
     dt_s: PositiveFloat | None = None
     store_every: PositiveInt | None = None
-    delta: float = Field(0.3, gt=0, lt=1)
+    delta: float = Field(DELTA, gt=0, lt=1)
     extrapolate: bool = False
     nonlinear: bool = False
     start_m: float | None = None

@@ -71,7 +71,7 @@ from scipy.ndimage import median_filter
 from trackdyn.beam.railseat import RailBeam, rest_state
 from trackdyn.beam.static import linear_supports, solve_beam
 from trackdyn.errors import TrackdynInputError
-from trackdyn.track.rails import rail_section
+from trackdyn.track.rails import DEFAULT_RAIL, rail_section
 from trackdyn.track.track import RAILS, Geometry, LinearisedTrack
 from trackdyn.track.winkler import stiffness_from_modulus
 from trackdyn.units import GRAVITY
@@ -114,7 +114,7 @@ class DiscreteParameters:
         characteristic length of 0.8 m (as the rail-seat windows, `trackdyn.beam.railseat`).
     """
 
-    rail: str = "60E1"
+    rail: str = DEFAULT_RAIL
     pad_stiffness: float = 800e6
     pad_damping: float = 50e3
     sleeper_mass: float = 125.5

@@ -53,6 +53,9 @@ class RailSection:
         return E_RAIL_STEEL * self.second_moment
 
 
+DEFAULT_RAIL = "60E1"
+"""Rail section of every model and command unless one is given: UIC 60 (EN 13674-1)."""
+
 RAIL_SECTIONS: dict[str, RailSection] = {
     r.name: r
     for r in (

@@ -235,10 +235,15 @@ class Curves(Sequence):
         return out
 
 
+DELTA = 0.3
+"""Dynamic wheel load increment δ of the linearisation (5.9) unless one is given [-]: the
+estimate the thesis gives where no measured value is available (Fröhling 1997, after eq 5.9)."""
+
+
 def linearise_curves(
     curves,
     static_load: float,
-    delta: float = 0.3,
+    delta: float = DELTA,
     *,
     method: str = "cubic",
     extrapolate: bool = False,
@@ -299,7 +304,7 @@ def linearise_curves(
 
 
 def secant_linearisation(
-    curve: SupportCurve, static_load: float, delta: float = 0.3, **options
+    curve: SupportCurve, static_load: float, delta: float = DELTA, **options
 ) -> tuple[float, float]:
     """`linearise_curves` for one curve: ``k2`` [N/m] and ``ys`` [m] as floats.
 

@@ -16,7 +16,7 @@ from scipy.interpolate import CubicSpline
 
 from trackdyn.errors import TrackdynInputError, check_series
 from trackdyn.limits import MAX_PROFILE, MAX_SLEEPER_GAP, SUPPORT_STIFFNESS, check_within
-from trackdyn.track.support import Curves, linearise_curves
+from trackdyn.track.support import DELTA, Curves, linearise_curves
 from trackdyn.track.winkler import modulus_from_stiffness
 
 RAILS = ("left", "right")
@@ -145,7 +145,7 @@ class Track:
             )
         return lo, hi
 
-    def linearise(self, static_load: float, delta: float = 0.3, **options) -> LinearisedTrack:
+    def linearise(self, static_load: float, delta: float = DELTA, **options) -> LinearisedTrack:
         """Effective linearised loaded stiffness and static deflection per sleeper (5.9-5.11).
 
         Parameters
