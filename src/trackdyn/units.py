@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import functools
 import re
+import threading
 import tokenize
 from typing import Any
 
@@ -93,14 +94,23 @@ _UNPARSED: tuple[type[BaseException], ...] = (
 _SYMBOL = re.compile(r"\b[^\W\d]\w*")
 
 
-@functools.cache
+_BUILDING = threading.Lock()
+
+
 def registry():
-    """The unit registry (`DEFINITIONS`), built on first use.
+    """The unit registry (`DEFINITIONS`), built on first use, one for all threads (pint
+    does not combine quantities of two registries).
 
     Returns
     -------
     pint.UnitRegistry
     """
+    with _BUILDING:
+        return _built()
+
+
+@functools.cache
+def _built():
     import pint
 
     units = pint.UnitRegistry(None, cache_folder=None)
