@@ -89,6 +89,8 @@ def test_the_registry_is_built_once():
         ("stiffness_kN_per_mm", "stiffness", "kN/mm"),
         ("speed_kmh", "speed", "km/h"),
         ("passages_per_mgt", "passages", "1/MGT"),
+        ("cost_per_100_mgt", "cost", "1/(100 MGT)"),
+        ("settlement_mm_per_mgt", "settlement", "mm/MGT"),
         ("dyn_load_sd_kN", "dyn_load_sd", "kN"),
         ("k2_min", "k2_min", None),  # no minute in the registry: "min" is a minimum
         ("load_cycles", "load_cycles", None),  # names spell units by symbol, not plural
