@@ -45,6 +45,24 @@ def test_supports_long_table_and_linear(tmp_path):
     assert lin.left[0].load[-1] / lin.left[0].deflection[-1] == pytest.approx(90e6)
 
 
+def test_columns_take_any_unit_of_their_kind(tmp_path):
+    # units outside the former table of column units: cm (1e-2 m), N, MN_per_mm (1e9 N/m)
+    g = read_geometry(write(tmp_path, "distance_cm,left_mm,right_mm\n0,1,1\n25,1,1\n"))
+    np.testing.assert_array_equal(g.distance, [0.0, 0.25])
+    rows = "".join(f"{x},{r},0,0\n{x},{r},1e5,1\n" for x in (0.3, 0.9) for r in ("left", "right"))
+    curves = read_supports(write(tmp_path, "distance_m,rail,load_N,deflection_mm\n" + rows))
+    assert curves.left[0].load[-1] == 1e5
+    lin = read_supports(
+        write(
+            tmp_path,
+            "distance_m,rail,stiffness_MN_per_mm\n"
+            "0.3,left,0.09\n0.9,left,0.09\n0.3,right,0.1\n0.9,right,0.1\n",
+        )
+    )
+    # 0.09 MN/mm = 90e6 N/m: the curve's slope
+    assert lin.left[0].load[-1] / lin.left[0].deflection[-1] == pytest.approx(90e6)
+
+
 def test_round_trip(tmp_path):
     g = Geometry(np.array([0.0, 0.25, 0.5]), np.array([1e-3, 0, -1e-3]), np.zeros(3))
     s = Supports.linear(np.array([0.1, 0.7]), 80e6, np.array([90e6, 95e6]))
@@ -64,6 +82,10 @@ def test_round_trip(tmp_path):
         ("distance_m,left_mm,right_mm\n1,1,1\n0,1,1\n", "not strictly increasing at line 3"),
         ("distance_m,left_mm\n0,1\n1,1\n", "no column right_"),
         ("distance_m,left_inch,right_mm\n0,1,1\n1,1,1\n", "unit 'inch'.*does not parse"),
+        # a unit of the registry, but a force: not a length unit
+        ("distance_m,left_kN,right_mm\n0,1,1\n1,1,1\n", "unit 'kN' of column 'left_kN' does not"),
+        # names spell units by symbol (trackdyn.units): "metre" is not read
+        ("distance_metre,left_mm,right_mm\n0,1,1\n1,1,1\n", "unit 'metre'.*length unit"),
         ("distance_m,left_mm,right_mm\n0,1,1\n1,abc,1\n", r"'left_mm'.*line 3"),
         # limits.MAX_PROFILE: ±1 m
         ("distance_m,left_mm,right_mm\n0,1,1\n1,1e300,1\n", r"left profile at row 1 is 1e\+300 mm"),

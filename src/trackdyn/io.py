@@ -3,7 +3,9 @@
 Geometry: ``distance_m,left_mm,right_mm`` (any length unit: ``m``, ``mm``, ``km``).
 Supports, long table of load-deflection curves: ``distance_m,rail,load_kN,deflection_mm``;
 or linear supports: ``distance_m,rail,stiffness_kN_per_mm``. ``rail`` is ``left`` or
-``right``; each sleeper position appears for both rails.
+``right``; each sleeper position appears for both rails. A column's unit is any unit of
+its kind in the unit registry, spelled as names spell units (`trackdyn.units`:
+``_per_`` for ``/``).
 """
 
 from __future__ import annotations
@@ -22,14 +24,14 @@ from trackdyn.errors import TrackdynInputError, check_series
 from trackdyn.limits import MAX_SAMPLE_SPACING
 from trackdyn.track.support import Curves
 from trackdyn.track.track import RAILS, Geometry, Supports
-from trackdyn.units import UNITS
+from trackdyn.units import spelled_factor
 
-COLUMN_UNITS = {
-    "length": ("m", "mm", "km"),
-    "force": ("N", "kN", "MN"),
-    "stiffness": ("N_per_m", "kN_per_mm", "MN_per_m"),
+COLUMN_KINDS = {
+    "length": ("m", "m, mm, km"),
+    "force": ("N", "N, kN, MN"),
+    "stiffness": ("N/m", "N_per_m, kN_per_mm, MN_per_m"),
 }
-"""Units a column name may end in, per kind; ``_per_`` spells ``/`` (`trackdyn.units.UNITS`)."""
+"""Kinds of column: the SI unit its values are converted to, and units to name in messages."""
 
 
 CHUNK_ROWS = 100_000
@@ -91,22 +93,23 @@ def column(frame: pd.DataFrame, quantity: str, kind: str, where) -> tuple[np.nda
     quantity : str
         Column name before the unit, e.g. ``"distance"``.
     kind : {"length", "force", "stiffness"}
-        Physical kind, which fixes the accepted units.
+        Physical kind (`COLUMN_KINDS`): the column's unit must be one of that kind.
     where : str or Path
         File name for error messages.
     """
+    si_unit, examples = COLUMN_KINDS[kind]
     matches = [c for c in frame.columns if str(c).startswith(quantity + "_")]
     if not matches:
-        raise TrackdynInputError(
-            f"{where}: no column {quantity}_<unit> (units: {', '.join(COLUMN_UNITS[kind])})"
-        )
+        raise TrackdynInputError(f"{where}: no column {quantity}_<unit> (units such as {examples})")
     name = matches[0]
     unit = name[len(quantity) + 1 :]
-    if unit not in COLUMN_UNITS[kind]:
+    try:
+        factor = spelled_factor(unit, si_unit)
+    except ValueError:
         raise TrackdynInputError(
             f"{where}: unit {unit!r} of column {name!r} does not parse as a {kind} unit "
-            f"({', '.join(COLUMN_UNITS[kind])})"
-        )
+            f"(such as {examples})"
+        ) from None
     values = pd.to_numeric(frame[name], errors="coerce").to_numpy(dtype=float)
     bad = np.flatnonzero(~np.isfinite(values))
     if bad.size:
@@ -114,7 +117,7 @@ def column(frame: pd.DataFrame, quantity: str, kind: str, where) -> tuple[np.nda
             f"{where}: column {name!r} is empty, NaN, infinite or not a number "
             f"at line {frame.index[bad[0]] + 2}"
         )
-    return values * UNITS[unit.replace("_per_", "/")][1], name
+    return values * factor, name
 
 
 def read_geometry(path) -> Geometry:

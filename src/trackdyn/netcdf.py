@@ -16,7 +16,9 @@ the Dataset the command goes on to plot:
   distance), else an integer index (``segment``, ``step``);
 - no ``_FillValue`` on coordinates; 64-bit integers as 32-bit; every variable has a
   ``long_name`` (taken from its name where the Dataset gives none) and, where the name ends
-  in a unit (``dyn_load_sd_kN``), its ``units``; units in UDUNITS spelling (``MGT``, million
+  in a unit (``dyn_load_sd_kN``, ``tamped_m_per_100_mgt``), its ``units``, read whole from
+  the name by the unit registry (`trackdyn.units.name_unit`); every ``units`` is parsed by
+  the registry and written in UDUNITS spelling (`trackdyn.units.udunits`: ``MGT``, million
   gross tonnes, as ``Mt``);
 - the time axis of a run is written as ``run_time``: CF reads a variable named ``time`` as
   calendar time, which needs a reference date that a simulation has not;
@@ -37,24 +39,9 @@ from __future__ import annotations
 import numpy as np
 
 from trackdyn.staging import record_of
+from trackdyn.units import name_unit, udunits
 
 CONVENTIONS = "CF-1.8"
-UDUNITS = {"MGT": "Mt", "-": "1"}
-"""Units spelled for UDUNITS in the file: in-memory spelling -> file spelling."""
-NAME_UNITS = {
-    "_kN_per_mm": "kN/mm",
-    "_m_per_s2": "m/s^2",
-    "_m_per_s": "m/s",
-    "_kmh": "km/h",
-    "_kN": "kN",
-    "_mm": "mm",
-    "_Hz": "Hz",
-    "_mgt": "Mt",
-    "_m": "m",
-    "_s": "s",
-    "_N": "N",
-}
-"""Unit of a variable whose name ends in the key (the project's column-name convention)."""
 RENAMED = {"time": "run_time"}
 """Dimensions written under another name (see the module docstring)."""
 LABEL_SUFFIX = "_name"
@@ -65,13 +52,6 @@ WALL_CLOCK = ("time_vehicle_runs_s", "time_beam_solves_s", "time_bookkeeping_s")
 def timings(ds) -> dict[str, float]:
     """The attributes of ``ds`` that say how long parts of its computation took [s]."""
     return {k: float(v) for k, v in ds.attrs.items() if k in WALL_CLOCK}
-
-
-def _unit_of(name: str) -> tuple[str, str | None]:
-    for suffix, unit in NAME_UNITS.items():
-        if name.endswith(suffix) and len(name) > len(suffix):
-            return name.removesuffix(suffix), unit
-    return name, None
 
 
 def _attribute(value):
@@ -85,12 +65,12 @@ def _attribute(value):
 
 def _describe(var, name: str) -> None:
     """Give ``var`` a long_name and CF units (in place, on the file's copy)."""
-    stem, unit = _unit_of(name)
+    stem, unit = name_unit(name)
     attrs = var.attrs
     if "units" not in attrs and unit is not None and var.dtype.kind in "fiu":
         attrs["units"] = unit
     if "units" in attrs:
-        attrs["units"] = UDUNITS.get(attrs["units"], attrs["units"])
+        attrs["units"] = udunits(str(attrs["units"]))
     if "long_name" not in attrs:
         attrs["long_name"] = stem.replace("_", " ")
     positive = attrs.pop("positive", None)  # CF: an attribute of vertical coordinates only

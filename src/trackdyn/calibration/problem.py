@@ -61,7 +61,7 @@ from trackdyn.io import read_supports
 from trackdyn.track.quality import WAVEBANDS
 from trackdyn.track.rails import rail_section
 from trackdyn.track.track import Geometry, Track
-from trackdyn.units import UNITS
+from trackdyn.units import si_factor
 
 RESIDUAL_SPACING = WAVEBANDS["D1"][0] / 2
 """Spacing of the residuals, half the shortest D1 wavelength [m]."""
@@ -206,7 +206,7 @@ def _fit_coordinates(spec, base: Path, law):
             )
         positive = lo > 0
         unit = table[name]["unit"]
-        units.append((unit, UNITS[unit][1]))
+        units.append((unit, si_factor(unit, known[name])))
         log.append(positive)
         lower.append(np.log(lo) if positive else lo)
         upper.append(np.log(hi) if positive else hi)

@@ -20,6 +20,7 @@ from scipy import signal
 
 from trackdyn.errors import error_message
 from trackdyn.options import RunOptions
+from trackdyn.units import name_unit
 
 SPECTRUM_FREQUENCY = np.arange(0.0, 40.0 + 1e-9, 0.125)
 """Common frequency grid of the runs' wheel-load spectra [Hz]."""
@@ -192,7 +193,7 @@ def gather(results: list[dict]):
     )
     ds = ds.assign_coords(frequency=("frequency", SPECTRUM_FREQUENCY, {"units": "Hz"}))
     for name in ds.data_vars:
-        unit = str(name).rsplit("_", 1)[-1] if "_" in str(name) else ""
-        if unit in {"kN", "mm", "Hz", "kmh", "s2"}:
-            ds[name].attrs["units"] = {"kmh": "km/h", "s2": "m/s^2"}.get(unit, unit)
+        unit = name_unit(str(name))[1]  # read whole: pad_stiffness_kN_per_mm is kN/mm
+        if unit is not None:
+            ds[name].attrs["units"] = unit
     return table, ds

@@ -15,7 +15,7 @@ from trackdyn.commands.calibrate.plots import calibration_figure, field_figure
 from trackdyn.deterioration.law_files import law_file_table, law_table_toml, law_units
 from trackdyn.track.quality import segment_sd
 from trackdyn.track.track import RAILS
-from trackdyn.units import UNITS
+from trackdyn.units import si_factor
 
 FILES = ("settlement_fitted.toml", "fit.csv", "calibration.csv", "calibration.png")
 """Files every calibration writes."""
@@ -201,7 +201,7 @@ def parameter_file(problem: Calibration, result: FitResult, where: str) -> str:
         entry = dict(table.get(name, {}))
         if name in fitted:
             value, se = fitted[name]
-            factor = UNITS[entry["unit"]][1]
+            factor = si_factor(entry["unit"], si_unit)
             entry["value"] = value / factor
             entry["source"] = (
                 f"{status(result)} by trackdyn calibrate ({Path(where).name}) to "
