@@ -40,14 +40,14 @@ from pydantic import Field, NonNegativeFloat, PositiveFloat, StrictFloat, model_
 from trackdyn.commands.deteriorate.outputs import life_cycle_table
 from trackdyn.commands.deteriorate.scenario import DeteriorationScenario, load_deterioration
 from trackdyn.commands.deteriorate.sections import NAME, section_tasks
+from trackdyn.commands.netcdf import write_netcdf
 from trackdyn.commands.plots import TAB10, plt, save
+from trackdyn.commands.staging import Record, output_folder
 from trackdyn.commands.tables import frame_table
 from trackdyn.data import EXAMPLE_GEOMETRY, EXAMPLE_SUPPORTS, example_path, load_track
 from trackdyn.deterioration.runs import Section
 from trackdyn.errors import TrackdynInputError, named, require_workers
-from trackdyn.netcdf import write_netcdf
 from trackdyn.options import Strict, load_toml, parse
-from trackdyn.staging import Record, output_folder
 from trackdyn.studies.interventions import (
     Scale,
     costs,

@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from trackdyn.staging import record_of
+from trackdyn.commands.staging import record_of
 
 CONVENTIONS = "CF-1.8"
 UDUNITS = {"MGT": "Mt", "-": "1"}

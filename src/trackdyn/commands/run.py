@@ -20,12 +20,12 @@ from __future__ import annotations
 from pathlib import Path
 
 from trackdyn.commands import plots
+from trackdyn.commands.netcdf import write_netcdf
+from trackdyn.commands.staging import Record, output_folder
 from trackdyn.commands.tables import frame_table
 from trackdyn.errors import named
-from trackdyn.netcdf import write_netcdf
 from trackdyn.options import RunOptions, Strict, TrackSpec, VehicleSpec, load_toml
 from trackdyn.progress import note, status
-from trackdyn.staging import Record, output_folder
 
 
 class Scenario(Strict):

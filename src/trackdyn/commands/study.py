@@ -7,14 +7,14 @@ from pathlib import Path
 import numpy as np
 
 from trackdyn.commands import plots
+from trackdyn.commands.netcdf import write_netcdf
 from trackdyn.commands.run import scenario_record
+from trackdyn.commands.staging import output_folder
 from trackdyn.commands.tables import frame_table
 from trackdyn.errors import TrackdynInputError, named
 from trackdyn.io import read_toml
-from trackdyn.netcdf import write_netcdf
 from trackdyn.options import RunOptions, load_toml
 from trackdyn.progress import note
-from trackdyn.staging import output_folder
 from trackdyn.studies.scenarios import Study
 
 STUDY_KEYS = {"kind", "matrix", "sensitivity", "speed"}

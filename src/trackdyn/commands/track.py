@@ -24,6 +24,8 @@ import numpy as np
 import xarray as xr
 
 from trackdyn.commands import plots
+from trackdyn.commands.netcdf import write_netcdf
+from trackdyn.commands.staging import Record, output_folder
 from trackdyn.commands.tables import frame_table
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import (
@@ -36,9 +38,7 @@ from trackdyn.io import (
     supports_of,
 )
 from trackdyn.limits import WHEEL_LOAD, check_within
-from trackdyn.netcdf import write_netcdf
 from trackdyn.progress import note, status
-from trackdyn.staging import Record, output_folder
 from trackdyn.track.analysis import (
     SEGMENT_M,
     curve_picks,

@@ -12,8 +12,8 @@ from trackdyn.commands.deteriorate.plots import (
     settlement_map,
     straight_line_diagram,
 )
+from trackdyn.commands.netcdf import write_netcdf
 from trackdyn.deterioration.results import vehicle_shares
-from trackdyn.netcdf import write_netcdf
 
 
 def _shares(ds) -> pd.DataFrame:
