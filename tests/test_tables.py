@@ -74,13 +74,13 @@ def test_study_table_keeps_each_run_and_its_failure():
 
 
 def test_figure_envelope_keeps_every_peak():
-    from trackdyn.commands.plots import _envelope
+    from trackdyn.commands.plots import envelope
 
     # 60 000 samples of a 1 kHz run thinned for a full-length panel: the extremes of every
     # stretch of 30 samples survive, so no peak of the wheel load disappears from the plot
     t = np.arange(60_000) * DT
     y = np.sin(2 * np.pi * 3.0 * t) + 0.1 * np.sin(2 * np.pi * 170.0 * t)
-    x, e = _envelope(t, y, points=4000)
+    x, e = envelope(t, y, points=4000)
     assert x.size == e.size == 4000
     assert e.max() == y.max() and e.min() == y.min()
     np.testing.assert_array_equal(e[1::2], y.reshape(2000, 30).max(axis=1))
