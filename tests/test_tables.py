@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from trackdyn.errors import Failure, Status
 from trackdyn.results import summary
-from trackdyn.studies.runner import SPECTRUM_FREQUENCY, gather
+from trackdyn.studies.runner import SPECTRUM_FREQUENCY, Statistics, gather
 
 PS = 127.5e3  # static wheel load [N]
 DT = 1e-3  # [s]
@@ -61,8 +62,8 @@ def test_summary_of_a_pure_sine():
 def test_study_table_keeps_each_run_and_its_failure():
     psd = np.linspace(1.0, 2.0, SPECTRUM_FREQUENCY.size)
     results = [
-        {"labels": {"speed_kmh": 40.0}, "row": {"dyn_load_sd_kN": 10.0}, "psd": psd},
-        {"labels": {"speed_kmh": 80.0}, "error": "vehicle parameter k1 must be > 0"},
+        ({"speed_kmh": 40.0}, Statistics({"dyn_load_sd_kN": 10.0}, psd)),
+        ({"speed_kmh": 80.0}, Failure(Status.INPUT_REFUSED, "vehicle parameter k1 must be > 0")),
     ]
     table, ds = gather(results)
     assert list(table["speed_kmh"]) == [40.0, 80.0]
