@@ -16,6 +16,7 @@ import time
 
 import numba
 
+from trackdyn.errors import Failure
 from trackdyn.options import RunOptions
 from trackdyn.parallel import run_tasks
 from trackdyn.studies.runner import Task, batches, in_order, run_batch, run_task
@@ -48,7 +49,7 @@ def main():
     t = time.perf_counter()
     batched = in_order(run_tasks(batches(runs), run_batch, workers=1))
     together = time.perf_counter() - t
-    assert [r.get("row") for r in batched] == [r.get("row") for r in serial]
+    assert [out.row for _, out in batched] == [out.row for _, out in serial]
     print(
         f"{len(runs)} runs on one core: one by one {one_by_one:.1f} s, batched "
         f"{together:.1f} s, {one_by_one / together:.2f} times the throughput"
@@ -58,8 +59,8 @@ def main():
         t = time.perf_counter()
         results = run_tasks(runs, run_task, workers=workers)
         times[workers] = time.perf_counter() - t
-        failed = [r for r in results if "error" in r]
-        assert not failed, failed[0]["error"]
+        failed = [out for _, out in results if isinstance(out, Failure)]
+        assert not failed, failed[0].message
     print(
         f"{len(runs)} runs: 1 worker {times[1]:.1f} s, 2 workers {times[2]:.1f} s, "
         f"speed-up {times[1] / times[2]:.2f}"

@@ -8,7 +8,7 @@ import time
 import pytest
 
 from trackdyn import parallel
-from trackdyn.errors import TrackdynInputError
+from trackdyn.errors import Status, TrackdynError, TrackdynInputError
 
 pytestmark = pytest.mark.slow  # real sockets and a real cluster
 
@@ -41,7 +41,8 @@ def test_a_scheduler_lost_mid_run_is_one_line():
                            dashboard_address=":0")  # fmt: skip
     threading.Timer(3.0, cluster.close).start()
     clock = time.perf_counter()
-    with pytest.raises(TrackdynInputError, match="lost the Dask scheduler at tcp://") as info:
+    with pytest.raises(TrackdynError, match="lost the Dask scheduler at tcp://") as info:
         parallel.run_tasks([2.0] * 6, time.sleep, scheduler=cluster.scheduler_address)
     assert "\n" not in str(info.value)
+    assert info.value.status is Status.WORKER_LOST  # not refused input: the CLI's line all the same
     assert time.perf_counter() - clock < 30.0

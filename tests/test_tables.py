@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from trackdyn.errors import Failure, Status
 from trackdyn.results import summary
-from trackdyn.studies.runner import SPECTRUM_FREQUENCY, gather
+from trackdyn.studies.runner import SPECTRUM_FREQUENCY, Statistics, gather
 
 PS = 127.5e3  # static wheel load [N]
 DT = 1e-3  # [s]
@@ -61,8 +62,8 @@ def test_summary_of_a_pure_sine():
 def test_study_table_keeps_each_run_and_its_failure():
     psd = np.linspace(1.0, 2.0, SPECTRUM_FREQUENCY.size)
     results = [
-        {"labels": {"speed_kmh": 40.0}, "row": {"dyn_load_sd_kN": 10.0}, "psd": psd},
-        {"labels": {"speed_kmh": 80.0}, "error": "vehicle parameter k1 must be > 0"},
+        ({"speed_kmh": 40.0}, Statistics({"dyn_load_sd_kN": 10.0}, psd)),
+        ({"speed_kmh": 80.0}, Failure(Status.INPUT_REFUSED, "vehicle parameter k1 must be > 0")),
     ]
     table, ds = gather(results)
     assert list(table["speed_kmh"]) == [40.0, 80.0]
@@ -74,13 +75,13 @@ def test_study_table_keeps_each_run_and_its_failure():
 
 
 def test_figure_envelope_keeps_every_peak():
-    from trackdyn.commands.plots import _envelope
+    from trackdyn.commands.plots import envelope
 
     # 60 000 samples of a 1 kHz run thinned for a full-length panel: the extremes of every
     # stretch of 30 samples survive, so no peak of the wheel load disappears from the plot
     t = np.arange(60_000) * DT
     y = np.sin(2 * np.pi * 3.0 * t) + 0.1 * np.sin(2 * np.pi * 170.0 * t)
-    x, e = _envelope(t, y, points=4000)
+    x, e = envelope(t, y, points=4000)
     assert x.size == e.size == 4000
     assert e.max() == y.max() and e.min() == y.min()
     np.testing.assert_array_equal(e[1::2], y.reshape(2000, 30).max(axis=1))

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from trackdyn.commands.netcdf import to_cf
 from trackdyn.deterioration.law_files import load_law
 from trackdyn.errors import TrackdynInputError
-from trackdyn.netcdf import to_cf
 from trackdyn.units import (
     DEFINITIONS,
     name_unit,

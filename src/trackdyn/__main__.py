@@ -3,7 +3,7 @@
 Interrupts are handled before anything heavy is imported, and the process ends without
 the interpreter's slow shutdown (where Python gives SIGINT back its default action), so
 Ctrl-C ends the command with exit code 130 and no partial output at any moment
-(`trackdyn.staging`).
+(`trackdyn.commands.staging`).
 """
 
 import os
@@ -19,7 +19,7 @@ def main():
     """Run the command-line interface."""
     for sig in (signal.SIGINT, signal.SIGTERM):  # first thing, before any heavy import
         signal.signal(sig, _exit_interrupted)
-    from trackdyn.staging import handle_interrupts
+    from trackdyn.commands.staging import handle_interrupts
 
     handle_interrupts()
     from trackdyn.cli import app

@@ -2,9 +2,11 @@
 
 Tasks are small picklable objects (parameters and file paths, never track arrays); the
 function run on each reports failures in its result instead of raising, so one failed
-run does not stop the others. By default the tasks go to a `distributed.LocalCluster`
-sized to the machine; with ``workers=1`` they run one after another in this process; with
-``scheduler`` they go to an existing cluster.
+run does not stop the others. A task whose worker process died on every retry (killed by
+the out-of-memory killer, say) comes back as a `trackdyn.errors.Failure` of status
+``WORKER_LOST`` in place of its result. By default the tasks go to a
+`distributed.LocalCluster` sized to the machine; with ``workers=1`` they run one after
+another in this process; with ``scheduler`` they go to an existing cluster.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from concurrent.futures import CancelledError
 from contextlib import contextmanager
 from contextvars import ContextVar
 
-from trackdyn.errors import TrackdynInputError, error_message, require_workers
+from trackdyn.errors import Failure, Status, TrackdynInputError, require_workers
 from trackdyn.progress import progress_bar
 
 
@@ -65,14 +67,14 @@ def _connect(client_class, scheduler: str):
         try:
             result["client"] = client_class(scheduler, timeout=f"{CONNECT_TIMEOUT:g}s")
         except Exception as exc:  # noqa: BLE001 - reported below as the refusal
-            result["error"] = exc
+            result["failure"] = Failure.of(exc)
 
     thread = threading.Thread(target=attempt, daemon=True)
     thread.start()
     thread.join(CONNECT_TIMEOUT + 2.0)
     if "client" in result:
         return result["client"]
-    why = error_message(result["error"]) if "error" in result else "no answer"
+    why = result["failure"].message if "failure" in result else "no answer"
     raise TrackdynInputError(
         f"cannot reach a Dask scheduler at {scheduler} within {CONNECT_TIMEOUT:g} s ({why})"
     )
@@ -198,6 +200,36 @@ def _each(func, tasks: list) -> list:
     return [func(t) for t in tasks]
 
 
+def _outcomes(client, futures, parts) -> list:
+    """The results of the groups of tasks, in order, once every future is done: for each
+    task of a group that Dask gave up on after its worker died on every retry, a `Failure`
+    of status ``WORKER_LOST``. An exception the function raised is raised here, as it is
+    when the tasks run in this process."""
+    from distributed.scheduler import KilledWorker
+
+    lost = [f for f in futures if f.status == "error" and isinstance(f.exception(), KilledWorker)]
+    keys = {f.key for f in lost}
+    kept = [f for f in futures if f.key not in keys]
+    results = dict(zip((f.key for f in kept), client.gather(kept), strict=True))
+    failure = Failure(
+        Status.WORKER_LOST,
+        f"its Dask worker process died running it (tries: {dask_allowed_failures() + 1}; "
+        "killed: out of memory?)",
+    )
+    out: list = []
+    for future, part in zip(futures, parts, strict=True):
+        out += [failure] * len(part) if future.key in keys else results[future.key]
+    return out
+
+
+def dask_allowed_failures() -> int:
+    """Times Dask reruns a task whose worker died before it gives up on it
+    (``distributed.scheduler.allowed-failures``)."""
+    import dask
+
+    return int(dask.config.get("distributed.scheduler.allowed-failures"))
+
+
 def run_tasks(
     tasks: list,
     func,
@@ -217,7 +249,8 @@ def run_tasks(
     func : callable
         Module-level function run on each task (or, with ``together``, on each list of
         tasks, returning a list of their results); it should report failures in its
-        result rather than raise.
+        result rather than raise. On a cluster, a task whose worker died on every retry
+        gets a `Failure` of status ``WORKER_LOST`` in place of its result.
     workers : int, optional
         Worker processes of the local cluster (default: one per core); 1 runs the tasks
         serially in this process.
@@ -250,13 +283,12 @@ def run_tasks(
             size = {f.key: len(part) for f, part in zip(futures, parts, strict=True)}
             for future in as_completed(futures):
                 bar.advance(size[future.key])
-            return [r for part in client.gather(futures) for r in part]
+            return _outcomes(client, futures, parts)
         except (CancelledError, OSError) as exc:  # the scheduler went away mid-run
             where = f" at {scheduler}" if scheduler else ""
             reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-            raise TrackdynInputError(
-                f"lost the Dask scheduler{where} during the run; nothing was written ({reason})"
-            ) from None
+            lost = f"lost the Dask scheduler{where} during the run; nothing was written ({reason})"
+            raise Failure(Status.WORKER_LOST, lost).error() from None
         finally:
             if shared is None:
                 client.close()

@@ -9,9 +9,9 @@ from rich.console import Console
 from typer.testing import CliRunner
 
 from trackdyn.cli import app
+from trackdyn.commands.netcdf import read_netcdf
 from trackdyn.commands.tables import deterioration_table, frame_table, header
 from trackdyn.io import write_geometry, write_supports
-from trackdyn.netcdf import read_netcdf
 from trackdyn.track.synthetic import synthetic_track
 from trackdyn.vehicle.parameters import load_vehicle
 
@@ -189,7 +189,7 @@ def test_a_staging_folder_of_a_killed_process_is_removed_by_the_next_run(tmp_pat
     import subprocess
     import sys
 
-    from trackdyn.staging import output_folder
+    from trackdyn.commands.staging import output_folder
 
     dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
                           capture_output=True, text=True, check=True).stdout.strip()  # fmt: skip

@@ -16,8 +16,8 @@ from typer.testing import CliRunner
 
 import trackdyn
 from trackdyn.cli import app
+from trackdyn.commands.netcdf import read_netcdf
 from trackdyn.io import write_geometry, write_supports
-from trackdyn.netcdf import read_netcdf
 from trackdyn.track.synthetic import synthetic_track
 
 runner = CliRunner()

@@ -9,6 +9,7 @@ import xarray as xr
 from typer.testing import CliRunner
 
 from trackdyn.cli import app
+from trackdyn.errors import Failure, Status
 from trackdyn.io import write_geometry, write_supports
 from trackdyn.options import RunOptions
 from trackdyn.parallel import run_tasks
@@ -20,6 +21,7 @@ from trackdyn.studies.runner import (
     gather,
     in_order,
     run_batch,
+    run_study,
     run_task,
 )
 from trackdyn.studies.scenarios import Study, tasks
@@ -170,3 +172,17 @@ def test_batched_study_gives_the_one_by_one_table(files):
     batched = gather(in_order(run_tasks(grouped, run_batch, workers=1)))
     pd.testing.assert_frame_equal(one_by_one[0], batched[0])
     xr.testing.assert_identical(one_by_one[1], batched[1])
+
+
+def test_the_runs_of_a_batch_whose_worker_was_lost_keep_their_labels(monkeypatch):
+    # `run_tasks` gives a batch whose worker died on every retry as one Failure: each run
+    # of the batch gets a row with its labels and the failure's message
+    from trackdyn import parallel
+
+    lost = Failure(Status.WORKER_LOST, "its Dask worker process died running it (tries: 4)")
+    monkeypatch.setattr(parallel, "run_tasks", lambda groups, func, **_: [lost] * len(groups))
+    runs = [Task(labels={"speed_kmh": v}) for v in (40.0, 60.0, 80.0)]
+    table, ds = gather(run_study(runs, workers=1))
+    assert list(table["speed_kmh"]) == [40.0, 60.0, 80.0]
+    assert list(table["error"]) == [lost.message] * 3
+    assert np.isnan(ds.wheel_load_psd).all()

@@ -75,7 +75,7 @@ from trackdyn.calibration.problem import (
     residuals,
     run_laws,
 )
-from trackdyn.errors import TrackdynInputError
+from trackdyn.errors import Failure
 
 FAILED_RUN_MM = 100.0
 """Residual given to every comparison point of a trial whose run failed (settlement that
@@ -151,11 +151,11 @@ class Objective:
         laws = [self.problem.law_at(p) for p in todo]
         runs = run_laws(self.problem, laws, self.problem.fit_options, workers=self.workers,
                         scheduler=self.scheduler, keep_failures=True)  # fmt: skip
-        if self.runs == 0 and isinstance(runs[0], str):
-            raise TrackdynInputError(f"the run at the starting values failed: {runs[0]}")
+        if self.runs == 0 and isinstance(runs[0], Failure):
+            raise runs[0].named("the run at the starting values failed").error()
         failed = []
         for p, ds in zip(todo, runs, strict=True):
-            if isinstance(ds, str):
+            if isinstance(ds, Failure):
                 failed.append((p, ds))
             else:
                 self.cache[_key(p)] = self.residual(ds)

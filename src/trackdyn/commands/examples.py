@@ -9,8 +9,8 @@ from __future__ import annotations
 import shutil
 from importlib.resources import files
 
+from trackdyn.commands.staging import output_folder
 from trackdyn.errors import unknown
-from trackdyn.staging import output_folder
 
 _TRACK = {
     "geometry.csv": "data/example_geometry.csv",

@@ -2,10 +2,11 @@
 
 Each task carries parameters and a reference to the track (file paths, or the built-in
 example), never the track arrays; workers read and linearise the track once and keep it.
-A failing run is reported with its labels and the others still finish. `batches` groups
-the tasks that share a track and model, and `run_batch` runs such a group side by side in
-one compiled call per block of steps: ``in_order(run_tasks(batches(tasks), run_batch))``
-gives the table ``run_tasks(tasks, run_task)`` gives.
+A failing run comes back as a `trackdyn.errors.Failure` with its labels, and the others
+still finish. `batches` groups the tasks that share a track and model, and `run_batch` runs
+such a group side by side in one compiled call per block of steps:
+``in_order(run_tasks(batches(tasks), run_batch))`` gives the table
+``run_tasks(tasks, run_task)`` gives.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import numpy as np
 import pandas as pd
 from scipy import signal
 
-from trackdyn.errors import error_message
+from trackdyn.errors import Failure
 from trackdyn.options import RunOptions
 from trackdyn.units import name_unit
 
@@ -50,6 +51,27 @@ class Task:
     run: RunOptions = RunOptions()
 
 
+@dataclass(frozen=True)
+class Statistics:
+    """What one study run gives: its row of the table and its wheel-load spectrum.
+
+    Parameters
+    ----------
+    row : dict
+        Statistics by column name, their units in the names (``dyn_load_sd_kN``).
+    psd : ndarray
+        PSD of the dynamic wheel load on `SPECTRUM_FREQUENCY`, mean of the contacts
+        [kN²/Hz].
+    """
+
+    row: dict
+    psd: np.ndarray
+
+
+Result = tuple[dict, Statistics | Failure]
+"""A study run's labels and its statistics, or its failure."""
+
+
 @functools.lru_cache(maxsize=8)
 def _track(geometry, supports):
     from trackdyn.data import load_track
@@ -65,10 +87,10 @@ def _linearised(ref: TrackRef, static_load: float, delta: float, extrapolate: bo
     return excitation_case(lin, ref.case)
 
 
-def run_task(task: Task) -> dict:
-    """Simulate one task; return its labels, statistics and wheel-load spectrum.
+def run_task(task: Task) -> Result:
+    """Simulate one task; return its labels and its `Statistics`.
 
-    Never raises: a failure comes back as ``{"labels", "error"}``.
+    Never raises: a failure comes back as a `Failure` in place of the statistics.
     """
     return run_batch([(0, task)])[0][1]
 
@@ -89,16 +111,16 @@ def batches(tasks: list[Task], size: int = BATCH_RUNS) -> list[list[tuple[int, T
     return [g[j : j + size] for g in groups.values() for j in range(0, len(g), size)]
 
 
-def run_batch(batch: list[tuple[int, Task]]) -> list[tuple[int, dict]]:
+def run_batch(batch: list[tuple[int, Task]]) -> list[tuple[int, Result]]:
     """Simulate a batch of tasks side by side (`trackdyn.simulation.simulate_batch`).
 
     Each result is the one `run_task` gives for the task alone, with the task's position.
-    Never raises: a failure comes back as ``{"labels", "error"}`` and the others finish.
+    Never raises: a failure comes back as a `Failure` and the others finish.
     """
     from trackdyn.simulation import simulate_batch
     from trackdyn.vehicle.parameters import load_vehicle
 
-    results: dict[int, dict] = {}
+    results: dict[int, Result] = {}
     ready = []
     for i, task in batch:
         try:
@@ -107,28 +129,25 @@ def run_batch(batch: list[tuple[int, Task]]) -> list[tuple[int, dict]]:
             lin = _linearised(task.track, vehicle.static_wheel_load, r.delta, r.extrapolate)
             ready.append((i, task, vehicle, lin))
         except Exception as exc:  # noqa: BLE001 - reported with the run's labels, others go on
-            results[i] = {"labels": task.labels, "error": error_message(exc)}
+            results[i] = (task.labels, Failure.of(exc))
     if ready:
         index, tasks, vehicles, lins = map(list, zip(*ready, strict=True))
         solved = simulate_batch(vehicles, lins, [t.run for t in tasks])
         for i, task, ds in zip(index, tasks, solved, strict=True):
-            if isinstance(ds, Exception):
-                results[i] = {"labels": task.labels, "error": error_message(ds)}
-            else:
-                results[i] = {"labels": task.labels, **_statistics(ds)}
+            results[i] = (task.labels, ds if isinstance(ds, Failure) else _statistics(ds))
     return [(i, results[i]) for i, _ in batch]
 
 
-def in_order(batch_results: list[list[tuple[int, dict]]]) -> list[dict]:
+def in_order(batch_results: list[list[tuple[int, Result]]]) -> list[Result]:
     """The results of `run_batch` over `batches` in the order of the tasks."""
     return [r for _, r in sorted((x for b in batch_results for x in b), key=lambda x: x[0])]
 
 
-def run_study(tasks: list[Task], *, workers=None, scheduler=None, progress=False) -> list[dict]:
+def run_study(tasks: list[Task], *, workers=None, scheduler=None, progress=False) -> list[Result]:
     """Run a study's tasks in batches spread over the workers; results in task order.
 
     Batches hold at most `BATCH_RUNS` runs and are made small enough that every worker
-    gets one.
+    gets one. The runs of a batch whose worker was lost come back with its `Failure`.
 
     Parameters
     ----------
@@ -149,10 +168,13 @@ def run_study(tasks: list[Task], *, workers=None, scheduler=None, progress=False
         groups, run_batch, workers=workers, scheduler=scheduler, progress=progress,
         label="batches of runs",
     )  # fmt: skip
-    return in_order(done)
+    return in_order([
+        [(i, (t.labels, out)) for i, t in group] if isinstance(out, Failure) else out
+        for group, out in zip(groups, done, strict=True)
+    ])  # fmt: skip
 
 
-def _statistics(ds) -> dict:
+def _statistics(ds) -> Statistics:
     """Statistics and wheel-load spectrum of one run."""
     from trackdyn.results import summary
 
@@ -169,22 +191,27 @@ def _statistics(ds) -> dict:
         "body_bounce_acc_rms_m_per_s2": float(table["body_bounce_acc_rms_m_per_s2"].iloc[0]),
         "dominant_frequency_Hz": float(table["dominant_frequency_Hz"].iloc[0]),
     }
-    return {"row": row, "psd": psd}
+    return Statistics(row, psd)
 
 
-def gather(results: list[dict]):
+def gather(results: list[Result]):
     """One tidy Dataset of the runs: labels, statistics, wheel-load spectrum, errors.
 
-    Failed runs keep their labels, NaN statistics and the error message in ``error``.
+    Failed runs keep their labels, NaN statistics and the failure's message in ``error``.
     """
     import xarray as xr
 
-    rows = [{**r["labels"], **r.get("row", {}), "error": r.get("error", "")} for r in results]
+    rows = [
+        {**labels, "error": str(out)}
+        if isinstance(out, Failure)
+        else {**labels, **out.row, "error": ""}
+        for labels, out in results
+    ]
     table = pd.DataFrame(rows)
     nan = np.full(SPECTRUM_FREQUENCY.size, np.nan)
     ds = xr.Dataset.from_dataframe(table.rename_axis("run"))
     ds["wheel_load_psd"] = xr.DataArray(
-        np.array([r.get("psd", nan) for r in results]),
+        np.array([nan if isinstance(out, Failure) else out.psd for _, out in results]),
         dims=("run", "frequency"),
         attrs={
             "units": "kN^2/Hz",

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from trackdyn.commands.staging import output_folder
 from trackdyn.commands.tables import alignment_table, fitted_table, frame_table
 from trackdyn.errors import require_workers
-from trackdyn.staging import output_folder
 
 
 def calibrate(calibration, out, overwrite: bool, workers, scheduler, console) -> bool:

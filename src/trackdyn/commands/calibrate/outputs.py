@@ -11,7 +11,8 @@ import pandas as pd
 from trackdyn.calibration.fit import FitResult
 from trackdyn.calibration.problem import Calibration
 from trackdyn.calibration.surveys import d1_change
-from trackdyn.commands.calibrate.plots import calibration_figure, field_figure
+from trackdyn.commands.calibrate.plots import plot_calibration, plot_field
+from trackdyn.commands.plots import save
 from trackdyn.deterioration.law_files import law_file_table, law_table_toml, law_units
 from trackdyn.track.quality import segment_sd
 from trackdyn.track.track import RAILS
@@ -234,8 +235,9 @@ def write_calibration(problem: Calibration, result: FitResult, folder, where: st
     fit_table(problem, result).to_csv(folder / FILES[1], index=False, float_format="%.6g")
     table = segment_table(problem, result)
     table.to_csv(folder / FILES[2], index=False, float_format="%.4g")
-    calibration_figure(problem, result, table, folder / FILES[3])
+    save(plot_calibration(result, problem=problem, table=table), folder / FILES[3])
     if result.field is not None:
         field_table(result).to_csv(folder / FIELD_FILES[0], index=False, float_format="%.6g")
-        field_figure(result.field, problem.fitted_extent, folder / FIELD_FILES[1])
+        fig = plot_field(result.field, extent=problem.fitted_extent)
+        save(fig, folder / FIELD_FILES[1])
     return table

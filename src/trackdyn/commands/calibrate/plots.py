@@ -1,4 +1,5 @@
-"""The figures of a calibration (matplotlib, no screen needed)."""
+"""Figures of `trackdyn calibrate`: the change since the first survey with the parity of
+the D1 SD per segment, and the estimated settlement-rate field."""
 
 from __future__ import annotations
 
@@ -6,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from trackdyn.commands.plots import RAIL_COLOURS, plt, save
+from trackdyn.commands.plots import RAIL_COLOURS, Figure, finished, panels, plt
 
 STYLES: dict[str, dict[str, Any]] = {
     "measured": {"color": "k", "lw": 0.8},
@@ -16,52 +17,67 @@ STYLES: dict[str, dict[str, Any]] = {
 """Line of each curve, the same in every panel."""
 
 
-def calibration_figure(problem, result, table, path) -> None:
+def plot_calibration(result, ax=None, *, problem, table) -> Figure:
     """Measured and predicted D1-band change of each later survey and rail along the track,
     and measured against predicted D1 SD per segment (parity).
 
     Parameters
     ----------
-    problem : trackdyn.calibration.problem.Calibration
-        The calibration.
     result : trackdyn.calibration.fit.FitResult
         The fit.
+    ax : array of matplotlib Axes, optional
+        Where to draw: (later surveys + 1) rows x 2 columns; a row per later survey of the
+        left and right rail's change, then the parity and the legend of the change panels.
+        Default: a new figure, the change panels sharing their axes.
+    problem : trackdyn.calibration.problem.Calibration
+        The calibration.
     table : DataFrame
         Its segment table (`trackdyn.commands.calibrate.outputs.segment_table`).
-    path : path
-        PNG file to write.
     """
     later = problem.mgt.size - 1
-    fig = plt.figure(figsize=(12, 2.6 * later + 4.2))
-    grid = fig.add_gridspec(later + 1, 2, height_ratios=[1] * later + [1.5])
+    fig, axes = _calibration_axes(later) if ax is None else panels(ax, later + 1, 2)
     x, fit, start = problem.x, result.comparison, result.start_comparison
-    top = None
     for k in range(1, problem.mgt.size):
         role = "fitted" if problem.fitted[k] else "check"
         for r, rail in enumerate(("left", "right")):
-            ax = fig.add_subplot(grid[k - 1, r], sharex=top, sharey=top)
-            top = top or ax
+            panel = axes[k - 1, r]
             curves = (fit.measured, fit.predicted, start.predicted)
             for (label, style), values in zip(STYLES.items(), curves, strict=True):
-                ax.plot(x, values[k, r] * 1e3, label=label, **style)
-            ax.fill_between(x, 0, 1, where=~problem.valid, color="0.9", step="mid",
-                            transform=ax.get_xaxis_transform(), label="not compared")  # fmt: skip
-            ax.set_title(f"{rail} rail, {problem.spec.survey[k].mgt:g} MGT ({role})", fontsize=9)
-            ax.grid(alpha=0.3)
+                panel.plot(x, values[k, r] * 1e3, label=label, **style)
+            panel.fill_between(x, 0, 1, where=~problem.valid, color="0.9", step="mid",
+                               transform=panel.get_xaxis_transform(),
+                               label="not compared")  # fmt: skip
+            survey = problem.spec.survey[k].mgt
+            panel.set_title(f"{rail} rail, {survey:g} MGT ({role})", fontsize=9)
+            panel.grid(alpha=0.3)
             if r == 0:
-                ax.set_ylabel("D1-band change [mm]\n(down +)")
+                panel.set_ylabel("D1-band change [mm]\n(down +)")
             if k == later:
-                ax.set_xlabel("distance [m]")
-    assert top is not None  # a survey after the first (the spec's check)
-    top.invert_yaxis()
-    handles, labels = top.get_legend_handles_labels()
-    parity = fig.add_subplot(grid[later, 0])
-    _parity(parity, table)
-    key = fig.add_subplot(grid[later, 1])
+                panel.set_xlabel("distance [m]")
+    for panel in axes[:later].flat:
+        panel.yaxis.set_inverted(True)
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    _parity(axes[later, 0], table)
+    key = axes[later, 1]
     key.axis("off")
     key.legend(handles, labels, loc="center left", title="change panels", fontsize=9)
     fig.suptitle("Calibration: change since the first survey, D1 band (3-25 m)")
-    save(fig, path)
+    return finished(fig, ax)
+
+
+def _calibration_axes(later: int):
+    """A new figure for `plot_calibration`: ``later`` rows of change panels sharing their
+    axes, and a taller row for the parity and the legend."""
+    fig = plt.figure(figsize=(12, 2.6 * later + 4.2))
+    grid = fig.add_gridspec(later + 1, 2, height_ratios=[1] * later + [1.5])
+    axes = np.empty((later + 1, 2), dtype=object)
+    for k in range(later):
+        for r in range(2):
+            top = axes[0, 0] if k or r else None
+            axes[k, r] = fig.add_subplot(grid[k, r], sharex=top, sharey=top)
+    axes[later, 0] = fig.add_subplot(grid[later, 0])
+    axes[later, 1] = fig.add_subplot(grid[later, 1])
+    return fig, axes
 
 
 def _parity(ax, table) -> None:
@@ -89,35 +105,35 @@ def _parity(ax, table) -> None:
     ax.legend(fontsize=7, loc="upper left")
 
 
-def field_figure(field, extent, path) -> None:
+def plot_field(field, ax=None, *, extent) -> Figure:
     """The estimated settlement-rate factor per rail seat with its ±2 standard errors.
 
     Parameters
     ----------
     field : trackdyn.calibration.field.FieldEstimate
         The estimate.
+    ax : array of 2 matplotlib Axes, optional
+        Where to draw the left and right rail; default: a new figure.
     extent : tuple of float
         First and last compared distance [m].
-    path : path
-        PNG file to write.
     """
-    fig, axes = plt.subplots(2, 1, figsize=(12, 6), sharex=True, sharey=True)
+    fig, axes = panels(ax, 2, 1, figsize=(12, 6), sharex=True, sharey=True)
     x = field.position
-    for r, (ax, rail) in enumerate(zip(axes, ("left", "right"), strict=True)):
+    for r, (panel, rail) in enumerate(zip(axes, ("left", "right"), strict=True)):
         f, se = field.factor[r], field.standard_error[r]
-        ax.fill_between(x, f - 2 * se, f + 2 * se, color=RAIL_COLOURS[rail], alpha=0.25,
-                        lw=0, label="±2 standard errors")  # fmt: skip
-        ax.plot(x, f, color=RAIL_COLOURS[rail], lw=0.9, label="estimated factor")
-        ax.axhline(1.0, color="k", lw=0.6)
+        panel.fill_between(x, f - 2 * se, f + 2 * se, color=RAIL_COLOURS[rail], alpha=0.25,
+                           lw=0, label="±2 standard errors")  # fmt: skip
+        panel.plot(x, f, color=RAIL_COLOURS[rail], lw=0.9, label="estimated factor")
+        panel.axhline(1.0, color="k", lw=0.6)
         for lo, hi in ((x[0], extent[0]), (extent[1], x[-1])):
-            ax.axvspan(lo, hi, color="0.9", zorder=0,
-                       label="not compared: the prior" if lo == x[0] else None)  # fmt: skip
-        ax.set_ylabel(f"{rail} rail\nsettlement-rate factor [-]")
-        ax.grid(alpha=0.3)
+            panel.axvspan(lo, hi, color="0.9", zorder=0,
+                          label="not compared: the prior" if lo == x[0] else None)  # fmt: skip
+        panel.set_ylabel(f"{rail} rail\nsettlement-rate factor [-]")
+        panel.grid(alpha=0.3)
     axes[0].legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     axes[-1].set_xlabel("distance [m]")
     fig.suptitle(
         f"Estimated settlement-rate field (cov {field.cov:.2f} of the data-chosen prior, "
         f"noise {field.noise_mm:.3f} mm)"
     )
-    save(fig, path)
+    return finished(fig, ax)

@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import dataclasses
 
+from trackdyn.commands.staging import Record, output_folder
 from trackdyn.commands.tables import deterioration_table
 from trackdyn.errors import require_workers
-from trackdyn.staging import Record, output_folder
 
 
 def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> None:

@@ -6,14 +6,15 @@ import numpy as np
 import pandas as pd
 
 from trackdyn.commands.deteriorate.plots import (
-    geometry_evolution,
-    line_diagram,
-    quality_evolution,
-    settlement_map,
-    straight_line_diagram,
+    plot_geometry_evolution,
+    plot_line,
+    plot_quality_evolution,
+    plot_settlement_map,
+    plot_straight_line,
 )
+from trackdyn.commands.netcdf import write_netcdf
+from trackdyn.commands.plots import save
 from trackdyn.deterioration.results import vehicle_shares
-from trackdyn.netcdf import write_netcdf
 
 
 def _shares(ds) -> pd.DataFrame:
@@ -222,15 +223,15 @@ def write_outputs(datasets, folder) -> list[str]:
         csv(settlement_table(ds), f"settlement_{name}.csv")
         title = f"{name}: {ds.attrs['traffic']}"
         for kind, draw in (
-            ("geometry", geometry_evolution),
-            ("quality", quality_evolution),
-            ("settlement_map", settlement_map),
-            ("straight_line", straight_line_diagram),
+            ("geometry", plot_geometry_evolution),
+            ("quality", plot_quality_evolution),
+            ("settlement_map", plot_settlement_map),
+            ("straight_line", plot_straight_line),
         ):
-            draw(ds, folder / f"{name}_{kind}.png", title)
+            save(draw(ds, title=title), folder / f"{name}_{kind}.png")
             names.append(f"{name}_{kind}.png")
     if len(datasets) > 1:
-        line_diagram(datasets, folder / "line.png", f"{len(datasets)} sections")
+        save(plot_line(datasets, title=f"{len(datasets)} sections"), folder / "line.png")
         names.append("line.png")
     csv(summary(datasets), "summary.csv")
     tables = [

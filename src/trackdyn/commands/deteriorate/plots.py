@@ -1,10 +1,11 @@
-"""Figures of a deterioration prediction (matplotlib, no screen needed); one PNG each."""
+"""Figures of `trackdyn deteriorate`: per section the geometry, the quality per segment, the
+settlement map and the straight-line diagram; for a line of sections its diagram."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from trackdyn.commands.plots import RAIL_COLOURS, plt, save
+from trackdyn.commands.plots import RAIL_COLOURS, Figure, finished, panels, plt
 
 VOID_SHOWN = 1e-3
 """Gap at rest above which the straight-line diagram marks a sleeper as hanging [m]: the
@@ -12,31 +13,32 @@ VOID_SHOWN = 1e-3
 ``hanging_sleepers`` counts those over 0.1 mm)."""
 
 
-def geometry_evolution(ds, path, title: str = "") -> None:
+def plot_geometry_evolution(ds, ax=None, *, title: str = "") -> Figure:
     """Unloaded space curve of each rail at the snapshot tonnages, and the settlement.
 
     Parameters
     ----------
     ds : xarray.Dataset
         Result of `trackdyn.deterioration.predict`.
-    path : path
-        PNG file to write.
+    ax : array of 3 matplotlib Axes, optional
+        Where to draw the left and right rail profiles and the settlement; default: a new
+        figure.
     title : str
         Figure title.
     """
-    fig, axes = plt.subplots(3, 1, figsize=(11, 9), sharex=True)
+    fig, axes = panels(ax, 3, 1, figsize=(11, 9), sharex=True)
     colours = plt.cm.viridis(np.linspace(0.0, 0.9, ds.sizes["snapshot"]))
-    for ax, rail in zip(axes[:2], ds.rail.values, strict=True):
+    for a, rail in zip(axes[:2], ds.rail.values, strict=True):
         for k, colour in enumerate(colours):
             mgt = float(ds.snapshot_mgt[k])
-            ax.plot(
+            a.plot(
                 ds.distance,
                 ds.profile.isel(snapshot=k).sel(rail=rail) * 1e3,
                 color=colour,
                 lw=0.6,
                 label=f"{mgt:g} MGT",
             )
-        ax.set_ylabel(f"{rail} rail profile [mm]\n(down +)")
+        a.set_ylabel(f"{rail} rail profile [mm]\n(down +)")
     final = ds.settlement.isel(mgt=-1)
     for rail in ds.rail.values:
         axes[2].plot(
@@ -47,16 +49,16 @@ def geometry_evolution(ds, path, title: str = "") -> None:
             label=str(rail),
         )
     axes[2].set_ylabel(f"settlement at\n{float(ds.mgt[-1]):g} MGT [mm]")
-    for ax in axes:
-        ax.invert_yaxis()
-        ax.grid(alpha=0.3)
-        ax.legend(loc="upper right", fontsize=7, ncol=2)
+    for a in axes:
+        a.invert_yaxis()
+        a.grid(alpha=0.3)
+        a.legend(loc="upper right", fontsize=7, ncol=2)
     axes[-1].set_xlabel("distance [m]")
     fig.suptitle(title or "Track geometry over accumulated traffic")
-    save(fig, path)
+    return finished(fig, ax)
 
 
-def quality_evolution(ds, path, title: str = "") -> None:
+def plot_quality_evolution(ds, ax=None, *, title: str = "") -> Figure:
     """The life cycle: D1 standard deviation of each segment against tonnage, with the
     threshold and the tampings (a triangle at each, the D1 SD dropping to its value after).
 
@@ -64,54 +66,54 @@ def quality_evolution(ds, path, title: str = "") -> None:
     ----------
     ds : xarray.Dataset
         Result of `trackdyn.deterioration.predict`.
-    path : path
-        PNG file to write.
+    ax : array of 2 matplotlib Axes, optional
+        Where to draw the left and right rail; default: a new figure.
     title : str
         Figure title.
     """
-    fig, axes = plt.subplots(1, 2, figsize=(12.5, 4.5), sharey=True)
+    fig, axes = panels(ax, 1, 2, figsize=(12.5, 4.5), sharey=True)
     colours = _segment_colours(ds.sizes["segment"])
     threshold = float(ds.attrs["option_threshold_sd_mm"])
-    for ax, rail in zip(axes, ds.rail.values, strict=True):
+    for a, rail in zip(axes, ds.rail.values, strict=True):
         for j, colour in enumerate(colours):
             lo, hi = float(ds.segment_start[j]), float(ds.segment_end[j])
             mgt, sd = _sawtooth(ds, rail, j)
-            ax.plot(mgt, sd, "-", color=colour, lw=1.0, label=f"{lo:g}-{hi:g} m")
+            a.plot(mgt, sd, "-", color=colour, lw=1.0, label=f"{lo:g}-{hi:g} m")
             mine = ds.intervention_segment.values == j
-            ax.plot(
+            a.plot(
                 ds.intervention_mgt.values[mine],
                 ds.d1_sd_before.sel(rail=rail).values[mine],
                 "v",
                 color=colour,
                 ms=4,
             )
-        ax.axhline(threshold, color="k", ls="--", lw=1, label=f"threshold {threshold:g} mm")
-        ax.set_title(f"{rail} rail")
-        ax.set_xlabel("accumulated traffic [MGT]")
-        ax.grid(alpha=0.3)
+        a.axhline(threshold, color="k", ls="--", lw=1, label=f"threshold {threshold:g} mm")
+        a.set_title(f"{rail} rail")
+        a.set_xlabel("accumulated traffic [MGT]")
+        a.grid(alpha=0.3)
     axes[0].set_ylabel("D1 standard deviation [mm]")
     axes[1].legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1))  # clear of the data
     fig.suptitle(title or "Geometry quality per segment")
-    save(fig, path)
+    return finished(fig, ax)
 
 
-def settlement_map(ds, path, title: str = "") -> None:
+def plot_settlement_map(ds, ax=None, *, title: str = "") -> Figure:
     """Settlement of each sleeper against tonnage, one panel per rail.
 
     Parameters
     ----------
     ds : xarray.Dataset
         Result of `trackdyn.deterioration.predict`.
-    path : path
-        PNG file to write.
+    ax : array of 2 matplotlib Axes, optional
+        Where to draw the left and right rail; default: a new figure.
     title : str
         Figure title.
     """
-    fig, axes = plt.subplots(2, 1, figsize=(11, 7), sharex=True)
+    fig, axes = panels(ax, 2, 1, figsize=(11, 7), sharex=True)
     settle = ds.settlement * 1e3
     vmax = float(settle.max()) or 1.0
-    for ax, rail in zip(axes, ds.rail.values, strict=True):
-        mesh = ax.pcolormesh(
+    for a, rail in zip(axes, ds.rail.values, strict=True):
+        mesh = a.pcolormesh(
             ds.sleeper_distance,
             ds.mgt,
             settle.sel(rail=rail),
@@ -120,12 +122,12 @@ def settlement_map(ds, path, title: str = "") -> None:
             vmin=0.0,
             vmax=vmax,
         )
-        ax.set_ylabel(f"{rail} rail\naccumulated traffic [MGT]")
-        ax.set_ylim(0.0, float(ds.mgt[-1]))
-        fig.colorbar(mesh, ax=ax, label="settlement [mm]")
+        a.set_ylabel(f"{rail} rail\naccumulated traffic [MGT]")
+        a.set_ylim(0.0, float(ds.mgt[-1]))
+        fig.colorbar(mesh, ax=a, label="settlement [mm]")
     axes[-1].set_xlabel("sleeper position [m]")
     fig.suptitle(title or "Sleeper settlement")
-    save(fig, path)
+    return finished(fig, ax)
 
 
 def _segment_colours(n: int):
@@ -145,7 +147,7 @@ def _sawtooth(ds, rail, j):
     return np.array(mgt), np.array(sd)
 
 
-def straight_line_diagram(ds, path, title: str = "") -> None:
+def plot_straight_line(ds, ax=None, *, title: str = "") -> Figure:
     """Segments along the chainage against tonnage, coloured by the D1 SD (the worse
     rail), with the tampings, the zones and the hanging sleepers.
 
@@ -153,24 +155,24 @@ def straight_line_diagram(ds, path, title: str = "") -> None:
     ----------
     ds : xarray.Dataset
         Result of `trackdyn.deterioration.predict`.
-    path : path
-        PNG file to write.
+    ax : array of 2 matplotlib Axes, optional
+        Where to draw the zones strip and the diagram; default: a new figure.
     title : str
         Figure title.
     """
-    fig, (top, ax) = plt.subplots(
-        2, 1, figsize=(11, 7), sharex=True, gridspec_kw={"height_ratios": [1, 6]}
+    fig, (top, diagram) = panels(
+        ax, 2, 1, figsize=(11, 7), sharex=True, gridspec_kw={"height_ratios": [1, 6]}
     )
     threshold = float(ds.attrs["option_threshold_sd_mm"])
-    mesh = _quality_mesh(ax, ds, 0.0, _top(ds, threshold))
-    bar = fig.colorbar(mesh, ax=[top, ax], label="D1 SD, worse rail [mm]")
+    mesh = _quality_mesh(diagram, ds, 0.0, _top(ds, threshold))
+    bar = fig.colorbar(mesh, ax=[top, diagram], label="D1 SD, worse rail [mm]")
     bar.ax.axhline(threshold, color="k", lw=1.5)
     mgt, seg = ds.mgt.values, ds.intervention_segment.values
-    ax.set_ylabel("accumulated traffic [MGT]")
-    ax.set_xlabel("distance [m]")
-    ax.set_ylim(0.0, float(mgt[-1]))
+    diagram.set_ylabel("accumulated traffic [MGT]")
+    diagram.set_xlabel("distance [m]")
+    diagram.set_ylim(0.0, float(mgt[-1]))
     if seg.size:
-        ax.legend(loc="upper left", bbox_to_anchor=(0.0, -0.1), ncol=2, fontsize=8)
+        diagram.legend(loc="upper left", bbox_to_anchor=(0.0, -0.1), ncol=2, fontsize=8)
     x = ds.sleeper_distance.values
     kind = ds.zone_kind.values.astype(str)
     names = sorted(set(kind))
@@ -185,8 +187,7 @@ def straight_line_diagram(ds, path, title: str = "") -> None:
     top.set_ylabel("zones", rotation=0, ha="right", va="center")
     top.legend(loc="lower left", bbox_to_anchor=(0.0, 1.02), ncol=len(names) + 1, fontsize=8)
     fig.suptitle(title or "Straight-line diagram")
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    return fig  # laid out by hand: tight_layout does not fit the shared colour bar
 
 
 def _top(ds, threshold: float) -> float:
@@ -213,7 +214,7 @@ def _quality_mesh(ax, ds, offset: float, vmax: float):
     return mesh
 
 
-def line_diagram(datasets, path, title: str = "") -> None:
+def plot_line(datasets, ax=None, *, title: str = "") -> Figure:
     """The straight-line diagram of a whole line: every section's segments end to end in
     the order of the sections list, against tonnage, coloured by the D1 SD of the worse
     rail, with the tampings; one colour scale and the threshold for all.
@@ -222,35 +223,34 @@ def line_diagram(datasets, path, title: str = "") -> None:
     ----------
     datasets : list of xarray.Dataset
         Results of `trackdyn.deterioration.predict` with a ``section`` attribute.
-    path : path
-        PNG file to write.
+    ax : matplotlib.axes.Axes, optional
+        Where to draw; default: a new figure.
     title : str
         Figure title.
     """
     threshold = max(float(ds.attrs["option_threshold_sd_mm"]) for ds in datasets)
     vmax = max(_top(ds, threshold) for ds in datasets)
-    fig, ax = plt.subplots(figsize=(12, 6))
+    fig, axis = panels(ax, figsize=(12, 6))
     offset, mesh = 0.0, None
     for ds in datasets:
         start = float(ds.segment_start[0])
-        mesh = _quality_mesh(ax, ds, offset - start, vmax)
+        mesh = _quality_mesh(axis, ds, offset - start, vmax)
         length = float(ds.segment_end[-1]) - start
-        ax.axvline(offset, color="k", lw=0.8)
-        ax.text(offset + length / 2, 1.01, ds.attrs["section"], transform=ax.get_xaxis_transform(),
-                ha="center", va="bottom", fontsize=8)  # fmt: skip
+        axis.axvline(offset, color="k", lw=0.8)
+        axis.text(offset + length / 2, 1.01, ds.attrs["section"], ha="center", va="bottom",
+                  fontsize=8, transform=axis.get_xaxis_transform())  # fmt: skip
         offset += length
     assert mesh is not None  # datasets is not empty (the max above)
-    bar = fig.colorbar(mesh, ax=ax, label="D1 SD, worse rail [mm]")
+    bar = fig.colorbar(mesh, ax=axis, label="D1 SD, worse rail [mm]")
     bar.ax.axhline(threshold, color="k", lw=1.5)
-    handles, labels = ax.get_legend_handles_labels()
+    handles, labels = axis.get_legend_handles_labels()
     keep = {label: h for h, label in zip(handles, labels, strict=True)}
     if keep:
-        ax.legend(keep.values(), keep.keys(), loc="upper left", bbox_to_anchor=(0.0, -0.1),
-                  ncol=2, fontsize=8)  # fmt: skip
-    ax.set_xlim(0.0, offset)
-    ax.set_ylim(0.0, max(float(ds.mgt[-1]) for ds in datasets))
-    ax.set_xlabel("distance along the line, sections end to end [m]")
-    ax.set_ylabel("accumulated traffic [MGT]")
+        axis.legend(keep.values(), keep.keys(), loc="upper left", bbox_to_anchor=(0.0, -0.1),
+                    ncol=2, fontsize=8)  # fmt: skip
+    axis.set_xlim(0.0, offset)
+    axis.set_ylim(0.0, max(float(ds.mgt[-1]) for ds in datasets))
+    axis.set_xlabel("distance along the line, sections end to end [m]")
+    axis.set_ylabel("accumulated traffic [MGT]")
     fig.suptitle(title or "Straight-line diagram of the line")
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    return fig  # laid out by hand, as the straight-line diagram

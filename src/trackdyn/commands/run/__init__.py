@@ -19,13 +19,19 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from trackdyn.commands import plots
+from trackdyn.commands.netcdf import write_netcdf
+from trackdyn.commands.plots import example_marks, save
+from trackdyn.commands.run.plots import (
+    plot_secondary,
+    plot_wedge_friction,
+    plot_wheel_load_exceedance,
+    plot_wheel_loads,
+)
+from trackdyn.commands.staging import Record, output_folder
 from trackdyn.commands.tables import frame_table
 from trackdyn.errors import named
-from trackdyn.netcdf import write_netcdf
 from trackdyn.options import RunOptions, Strict, TrackSpec, VehicleSpec, load_toml
 from trackdyn.progress import note, status
-from trackdyn.staging import Record, output_folder
 
 
 class Scenario(Strict):
@@ -99,16 +105,16 @@ def write_run_figures(ds, spec: Scenario, folder: Path) -> None:
     folder : Path
         Output folder.
     """
-    marks = plots.example_marks() if spec.track.geometry is None else []
+    marks = example_marks() if spec.track.geometry is None else []
     delta = spec.run.delta
     figures = {
-        "wheel_loads.png": plots.plot_wheel_loads(ds, delta, marks),
-        "wheel_load_exceedance.png": plots.plot_wheel_load_exceedance(ds, delta),
-        "secondary_displacement.png": plots.plot_secondary(ds, marks),
-        "wedge_friction.png": plots.plot_wedge_friction(ds),
+        "wheel_loads.png": plot_wheel_loads(ds, delta=delta, marks=marks),
+        "wheel_load_exceedance.png": plot_wheel_load_exceedance(ds, delta=delta),
+        "secondary_displacement.png": plot_secondary(ds, marks=marks),
+        "wedge_friction.png": plot_wedge_friction(ds),
     }
     for name, fig in figures.items():
-        plots.save(fig, folder / name)
+        save(fig, folder / name)
 
 
 def run(scenario, out, overwrite: bool, console) -> None:

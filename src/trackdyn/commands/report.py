@@ -92,7 +92,7 @@ def render(summary: dict, folder: Path) -> str:
     Parameters
     ----------
     summary : dict
-        The folder's ``summary.json`` content (`trackdyn.staging.Record.summary`).
+        The folder's ``summary.json`` content (`trackdyn.commands.staging.Record.summary`).
     folder : Path
         The folder holding the files the summary lists.
     """

@@ -23,8 +23,15 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from trackdyn.commands import plots
+from trackdyn.commands.netcdf import write_netcdf
+from trackdyn.commands.plots import example_marks, save
+from trackdyn.commands.staging import Record, output_folder
 from trackdyn.commands.tables import frame_table
+from trackdyn.commands.track.plots import (
+    plot_deflection_basin,
+    plot_load_deflection,
+    plot_track_overview,
+)
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import (
     CHUNK_ROWS,
@@ -36,9 +43,7 @@ from trackdyn.io import (
     supports_of,
 )
 from trackdyn.limits import WHEEL_LOAD, check_within
-from trackdyn.netcdf import write_netcdf
 from trackdyn.progress import note, status
-from trackdyn.staging import Record, output_folder
 from trackdyn.track.analysis import (
     SEGMENT_M,
     curve_picks,
@@ -303,11 +308,11 @@ def write_track_outputs(ds: xr.Dataset, picks, basin, folder, marks=()) -> None:
     ps, delta = ds.attrs["static_wheel_load_N"], ds.attrs["delta"]
     write_netcdf(ds, folder / "track.nc")
     threshold = LoopOptions.model_fields["threshold_sd_mm"].default
-    plots.save(plots.plot_track_overview(ds, marks, threshold), folder / "track_overview.png")
-    plots.save(plots.plot_load_deflection(picks, ps, delta), folder / "load_deflection.png")
-    rail, x0, with_gap, without_gap = basin
-    fig = plots.plot_deflection_basin(rail, x0, with_gap, without_gap, ps)
-    plots.save(fig, folder / "deflection_basin.png")
+    fig = plot_track_overview(ds, marks=marks, threshold_sd_mm=threshold)
+    save(fig, folder / "track_overview.png")
+    fig = plot_load_deflection(picks, static_load=ps, delta=delta)
+    save(fig, folder / "load_deflection.png")
+    save(plot_deflection_basin(basin, load=ps), folder / "deflection_basin.png")
 
 
 def track(
@@ -360,7 +365,7 @@ def track(
             for rail, row in table.set_index("rail").iterrows()
             for col, value in row.items()
         }
-        write_track_outputs(ds, picks, basin, stage, [] if given else plots.example_marks())
+        write_track_outputs(ds, picks, basin, stage, [] if given else example_marks())
     console.print(frame_table(table, f"Track summary ({ds.attrs['geometry_source']})"))
     note(f"wrote track.nc, summary.json and 3 figures to {out}")
     note("\n".join(record.lines()), 2)

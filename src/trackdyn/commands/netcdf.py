@@ -5,9 +5,10 @@ CF conventions 1.8 (checked by the IOOS compliance checker in the tests) without
 the Dataset the command goes on to plot:
 
 - global attributes ``Conventions``, ``title``, ``history`` (the command line, no date),
-  ``trackdyn_version``, ``source``, and from the output folder's `trackdyn.staging.Record`
-  the inputs (``input_<name>`` path and ``input_<name>_sha256``), the options
-  (``option_<name>``) and the vehicle parameters (``vehicle_<name>`` [SI]);
+  ``trackdyn_version``, ``source``, and from the output folder's
+  `trackdyn.commands.staging.Record` the inputs (``input_<name>`` path and
+  ``input_<name>_sha256``), the options (``option_<name>``) and the vehicle parameters
+  (``vehicle_<name>`` [SI]);
 - every dimension has an index coordinate: a dimension labelled by names (``contact``,
   ``rail``, ``dof``, ...) is written as an integer index with the names in the label
   variable ``<dim>_name`` (CF 6.1: a coordinate variable is numeric); a dimension without a
@@ -38,7 +39,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from trackdyn.staging import record_of
+from trackdyn.commands.staging import record_of
 from trackdyn.units import name_unit, udunits
 
 CONVENTIONS = "CF-1.8"
@@ -99,7 +100,7 @@ def to_cf(ds, record=None):
     ----------
     ds : xarray.Dataset
         A command's result.
-    record : trackdyn.staging.Record, optional
+    record : trackdyn.commands.staging.Record, optional
         The run's provenance, for the global attributes.
     """
     out = ds.copy()
@@ -131,7 +132,7 @@ def global_attributes(title: str | None, record=None) -> dict:
     ----------
     title : str, optional
         Title; default the record's.
-    record : trackdyn.staging.Record, optional
+    record : trackdyn.commands.staging.Record, optional
         The run's provenance.
     """
     from trackdyn import __version__
@@ -163,8 +164,8 @@ def write_netcdf(ds, path) -> None:
     ds : xarray.Dataset
         A command's result.
     path : Path
-        The file, in a command's staging folder (`trackdyn.staging.output_folder`), whose
-        record gives the provenance.
+        The file, in a command's staging folder
+        (`trackdyn.commands.staging.output_folder`), whose record gives the provenance.
     """
     record = record_of(path)
     out = to_cf(ds, record)

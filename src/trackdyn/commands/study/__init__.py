@@ -6,15 +6,21 @@ from pathlib import Path
 
 import numpy as np
 
-from trackdyn.commands import plots
+from trackdyn.commands.netcdf import write_netcdf
+from trackdyn.commands.plots import save
 from trackdyn.commands.run import scenario_record
+from trackdyn.commands.staging import output_folder
+from trackdyn.commands.study.plots import (
+    plot_spectra,
+    plot_speed_sweep,
+    plot_study_matrix,
+    plot_tornado,
+)
 from trackdyn.commands.tables import frame_table
 from trackdyn.errors import TrackdynInputError, named
 from trackdyn.io import read_toml
-from trackdyn.netcdf import write_netcdf
 from trackdyn.options import RunOptions, load_toml
 from trackdyn.progress import note
-from trackdyn.staging import output_folder
 from trackdyn.studies.scenarios import Study
 
 STUDY_KEYS = {"kind", "matrix", "sensitivity", "speed"}
@@ -66,18 +72,24 @@ def write_study(table, ds, study, folder, sleeper_spacing=None) -> list[str]:
     if not (table["error"] == "").any():
         return names
     figures = {
-        "matrix": ("study_cases.png", plots.plot_study_matrix),
-        "speed": ("speed_sweep.png", plots.plot_speed_sweep),
+        "matrix": ("study_cases.png", plot_study_matrix),
+        "speed": ("speed_sweep.png", plot_speed_sweep),
     }
     if not study.sensitivity.grid:
-        figures["sensitivity"] = ("tornado.png", plots.plot_tornado)
+        figures["sensitivity"] = ("tornado.png", plot_tornado)
     if study.kind in figures:
         name, draw = figures[study.kind]
-        plots.save(draw(table), folder / name)
+        save(draw(table), folder / name)
         names.append(name)
     synthetic = WAVELENGTH_RANGE[0] if study.track.geometry is None else None
-    fig = plots.plot_spectra(table, ds, study.run.speed_kmh, sleeper_spacing, synthetic)
-    plots.save(fig, folder / "spectra.png")
+    fig = plot_spectra(
+        ds,
+        table=table,
+        speed_kmh=study.run.speed_kmh,
+        sleeper_spacing=sleeper_spacing,
+        shortest_wavelength=synthetic,
+    )
+    save(fig, folder / "spectra.png")
     return [*names, "spectra.png"]
 
 

@@ -7,8 +7,8 @@ another command's outputs is refused unless ``overwrite`` is given. With a `Reco
 folder also gets `SUMMARY` (``summary.json``): the trackdyn version, the command line, the
 options, the inputs with their SHA-256, the headline figures, how long the run took and the
 files; and ``report.html``, all of it with the tables and figures in one page
-(`trackdyn.report`); netCDF files written into the folder take their provenance from the same record
-(`trackdyn.netcdf`).
+(`trackdyn.commands.report`); netCDF files written into the folder take their provenance
+from the same record (`trackdyn.commands.netcdf`).
 
 An interrupt (Ctrl-C, SIGTERM) ends the process at once with exit code 130: staging
 folders and output folders this process created are removed, child processes (local Dask
@@ -237,7 +237,7 @@ def output_folder(
     try:
         yield stage
         if record is not None:
-            from trackdyn.report import REPORT, render
+            from trackdyn.commands.report import REPORT, render
 
             files = sorted([p.name for p in stage.iterdir()] + [SUMMARY, REPORT])
             record.timings["total"] = time.perf_counter() - started

@@ -40,14 +40,15 @@ from pydantic import Field, NonNegativeFloat, PositiveFloat, StrictFloat, model_
 from trackdyn.commands.deteriorate.outputs import life_cycle_table
 from trackdyn.commands.deteriorate.scenario import DeteriorationScenario, load_deterioration
 from trackdyn.commands.deteriorate.sections import NAME, section_tasks
-from trackdyn.commands.plots import TAB10, plt, save
+from trackdyn.commands.interventions.plots import plot_comparison
+from trackdyn.commands.netcdf import write_netcdf
+from trackdyn.commands.plots import save
+from trackdyn.commands.staging import Record, output_folder
 from trackdyn.commands.tables import frame_table
 from trackdyn.data import EXAMPLE_GEOMETRY, EXAMPLE_SUPPORTS, example_path, load_track
 from trackdyn.deterioration.runs import Section
 from trackdyn.errors import TrackdynInputError, named, require_workers
-from trackdyn.netcdf import write_netcdf
 from trackdyn.options import Strict, load_toml, parse
-from trackdyn.staging import Record, output_folder
 from trackdyn.studies.interventions import (
     Scale,
     costs,
@@ -240,34 +241,6 @@ def compare(study: InterventionsStudy, names, datasets) -> tuple[pd.DataFrame, p
     return pd.DataFrame(rows), frame[["alternative", *frame.columns[:-1]]]
 
 
-def plot_comparison(table: pd.DataFrame, path, title: str) -> None:
-    """Bars per alternative: tampings (renewals hatched on top), mean interval [MGT]
-    ("none" where no segment had two interventions), life-cycle cost (the intervention's
-    own cost hatched on top)."""
-    panels = (
-        ("tampings", "renewals", "tampings, renewals hatched [-]"),
-        ("mean_interval_mgt", None, "mean interval [MGT]"),
-        ("life_cycle_cost", "intervention_cost", "life-cycle cost, intervention hatched"),
-    )
-    fig, axes = plt.subplots(1, 3, figsize=(12, 4))
-    colours = np.array([TAB10[i % len(TAB10)] for i in range(len(table))])
-    names = table["alternative"]
-    for ax, (key, top, label) in zip(axes, panels, strict=True):
-        total = table[key] + (table[top] if key == "tampings" else 0.0)
-        hatched = table[top] if top else 0.0 * total
-        ax.bar(names, total - hatched, color=colours)
-        shown = hatched > 0
-        ax.bar(names[shown], hatched[shown], bottom=(total - hatched)[shown], color=colours[shown],
-               edgecolor="k", hatch="//")  # fmt: skip
-        for i in np.flatnonzero(np.isnan(total.to_numpy())):  # e.g. no two tampings
-            ax.annotate("none", (i, 0.0), ha="center", va="bottom", fontsize=8)
-        ax.set_ylabel(label)
-        ax.grid(axis="y", alpha=0.3)
-        plt.setp(ax.get_xticklabels(), rotation=25, ha="right")
-    fig.suptitle(title)
-    save(fig, path)
-
-
 def interventions(path, out, overwrite: bool, workers, scheduler, console) -> None:
     """Run an interventions study; write interventions_compared.csv/.nc, the life cycle per
     segment (interventions_segments.csv) and interventions_compared.png.
@@ -305,8 +278,8 @@ def interventions(path, out, overwrite: bool, workers, scheduler, console) -> No
             table.to_csv(stage / "interventions_compared.csv", index=False, float_format="%.6g")
             segments.to_csv(stage / "interventions_segments.csv", index=False,
                             float_format="%.6g")  # fmt: skip
-            plot_comparison(table, stage / "interventions_compared.png",
-                            f"Interventions over {spec.horizon_mgt:g} MGT")  # fmt: skip
+            title = f"Interventions over {spec.horizon_mgt:g} MGT"
+            save(plot_comparison(table, title=title), stage / "interventions_compared.png")
     console.print(frame_table(table, f"Interventions over {spec.horizon_mgt:g} MGT"))
     console.print(f"wrote interventions_compared.csv/.nc/.png and interventions_segments.csv "
                   f"to {out}")  # fmt: skip
