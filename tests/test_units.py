@@ -203,14 +203,11 @@ def test_units_other_than_the_former_tables_convert(tmp_path):
 
 
 def test_a_study_table_gets_its_units_read_whole():
-    from trackdyn.studies.runner import SPECTRUM_FREQUENCY, gather
+    from trackdyn.studies.runner import SPECTRUM_FREQUENCY, Statistics, gather
 
-    run = {
-        "labels": {"pad_stiffness_kN_per_mm": 90.0, "speed_kmh": 60.0},
-        "row": {"dyn_load_max_kN": 12.0},
-        "psd": np.zeros(SPECTRUM_FREQUENCY.size),
-    }
-    _, ds = gather([run])
+    labels = {"pad_stiffness_kN_per_mm": 90.0, "speed_kmh": 60.0}
+    stats = Statistics({"dyn_load_max_kN": 12.0}, np.zeros(SPECTRUM_FREQUENCY.size))
+    _, ds = gather([(labels, stats)])
     # the last part alone ("mm") was the unit written before
     assert ds.pad_stiffness_kN_per_mm.attrs["units"] == "kN/mm"
     assert ds.speed_kmh.attrs["units"] == "km/h" and ds.dyn_load_max_kN.attrs["units"] == "kN"
