@@ -24,8 +24,8 @@ from trackdyn.vehicle.parameters import load_vehicle
 
 PASSAGES = 8065.0  # 1e6 t / (104 t + 20 t), the example's coal traffic [per MGT]
 TRAFFIC = (
-    Traffic(load_vehicle("loaded"), 60 / 3.6, PASSAGES, "loaded"),
-    Traffic(load_vehicle("empty"), 60 / 3.6, PASSAGES, "empty"),
+    Traffic(load_vehicle("loaded"), 60.0, PASSAGES, "loaded"),
+    Traffic(load_vehicle("empty"), 60.0, PASSAGES, "empty"),
 )
 
 
@@ -42,7 +42,7 @@ def tasks(tmp_path_factory):
         write_geometry(trk.geometry, geometry)
         write_supports(trk.supports, supports)
         options = LoopOptions(run=RunOptions(model="11dof"), total_mgt=10.0,
-                              snapshot_every_mgt=5.0, segment_length=50.0, seed=i)  # fmt: skip
+                              snapshot_every_mgt=5.0, segment_length_m=50.0, seed=i)  # fmt: skip
         section = Section(f"s{i}", str(geometry), str(supports))
         out.append(SectionTask(section, TRAFFIC, load_law("power"), options))
     return out

@@ -260,7 +260,7 @@ class TrafficRun:
             load = traffic.vehicle.static_wheel_load
             dt = min(dt, stable_step(discrete_track(lin, self.discrete), load))
         every = max(1, int(options.output_spacing / (traffic.speed * dt)))
-        self.run = options.run.with_(speed_kmh=traffic.speed * 3.6, dt_s=dt, store_every=every)
+        self.run = options.run.with_(speed_kmh=traffic.speed_kmh, dt_s=dt, store_every=every)
         self.state = None  # the ballast state of its latest run on the discrete track
         self.step: StepLoads | None = None
         self.placed: tuple | None = None  # (solved run, its `wheel_forces`)

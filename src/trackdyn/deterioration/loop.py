@@ -66,7 +66,7 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-from pydantic import ConfigDict
+from pydantic import ConfigDict, Field
 from scipy.ndimage import uniform_filter1d
 from scipy.optimize import brentq
 
@@ -99,8 +99,8 @@ class Traffic:
     ----------
     vehicle : Vehicle
         Vehicle parameter set.
-    speed : float
-        Running speed [m/s].
+    speed_kmh : float
+        Running speed [km/h] (the ``[[traffic]]`` key).
     passages_per_mgt : float
         Passages of this vehicle per million gross tonnes of traffic [-].
     label : str
@@ -108,26 +108,47 @@ class Traffic:
     """
 
     vehicle: Vehicle
-    speed: float
+    speed_kmh: float
     passages_per_mgt: float
     label: str = ""
+
+    @property
+    def speed(self) -> float:
+        """Running speed [m/s]."""
+        return self.speed_kmh / 3.6
 
     def gross_mass(self, model: str) -> float:
         """Gross mass of the vehicle as the vehicle model ``model`` carries it [kg]."""
         return build_model(model, self.vehicle).gross_mass
 
 
+LOOP_TABLE = "loop"
+"""Marker of the `LoopOptions` fields that are keys of a scenario file's ``[loop]`` table."""
+
+
+def _loop_key(default, **bounds):
+    """A `LoopOptions` field that is also a key of the ``[loop]`` table (`LOOP_TABLE`)."""
+    return Field(default, json_schema_extra={"table": LOOP_TABLE}, **bounds)
+
+
 class LoopOptions(Strict):
-    """Options of the deterioration loop; each default lives here (the ``[loop]`` table of
-    a scenario file takes its defaults from these).
+    """Options of the deterioration loop; each default lives here.
+
+    The names are those of the scenario files, with their unit suffix (``_mm``, ``_m``,
+    ``_kg``); the options the loop uses in SI are properties of the name without the
+    suffix (``max_step_settlement`` [m], ...), derived here and nowhere else. The fields
+    marked `LOOP_TABLE` are a scenario file's ``[loop]`` table (validated by this model);
+    ``rate_cov``, ``rate_correlation_length_m`` and ``seed`` come from its
+    ``[settlement]`` table, ``rail`` and ``start`` from ``[track]``, ``run`` from
+    ``[run]`` and ``maintenance`` from ``[maintenance]``, by name.
 
     Parameters
     ----------
     total_mgt : float
         Traffic to predict over [MGT].
-    max_step_settlement : float
+    max_step_settlement_mm : float
         Largest change of the settlement's shape (less its moving mean over
-        `SHAPE_WAVELENGTH`) of any sleeper in one step [m]; a sleeper's stable step
+        `SHAPE_WAVELENGTH`) of any sleeper in one step [mm]; a sleeper's stable step
         (`stable_settlement`) may keep the load updates within it shorter. Default 1 mm:
         on the built-in example through 50 MGT the D1 SD of every segment is within
         0.25 % of that with 0.25 mm steps (15 steps against 55), its 300 MGT life has the
@@ -141,14 +162,14 @@ class LoopOptions(Strict):
     threshold_sd_mm : float
         D1 standard deviation that triggers maintenance [mm]; default 1.6 mm, illustrative
         (set within what the tamped example reaches in 50 MGT; a railway sets its own).
-    segment_length : float
+    segment_length_m : float
         Segment length of the D1 standard deviation [m].
     max_steps : int
         Steps allowed before giving up.
     rate_cov : float
         Coefficient of variation of the lognormal settlement-rate factor per sleeper [-];
         default 0.3, illustrative (an engineering estimate, not a published value).
-    rate_correlation_length : float
+    rate_correlation_length_m : float
         Correlation length of that factor along the track [m]; default 3 m, illustrative
         (an engineering estimate: a few sleepers).
     seed : int or tuple of int
@@ -160,7 +181,7 @@ class LoopOptions(Strict):
         Multiplier of the settlement rate per sleeper (both rails) [-] on top of the rate
         field and the zones' own, e.g. under-sleeper pads over a range (the interventions
         study's ``settlement_scale``); default none (1).
-    sleeper_mass : float
+    sleeper_mass_kg : float
         Sleeper mass per rail seat, hanging from the rail when its ballast sinks [kg];
         default 125.5 kg, the half-sleeper mass of Zhai et al. (2004).
     run : RunOptions
@@ -168,7 +189,7 @@ class LoopOptions(Strict):
         of the vehicle runs; each vehicle's speed comes from its `Traffic`.
     rail : str
         Rail section, for the bending stiffness EI of the load distribution.
-    output_spacing : float
+    output_spacing_m : float
         Travel between stored simulation samples [m] (sets ``store_every``).
     start : str
         ``"as measured"``: the track as its files give it; ``"tamped"``: freshly tamped
@@ -189,25 +210,67 @@ class LoopOptions(Strict):
 
     model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
 
-    total_mgt: float = 50.0
-    max_step_settlement: float = 1e-3
-    snapshot_every_mgt: float = 10.0
-    threshold_sd_mm: float = 1.6
-    segment_length: float = 200.0
-    max_steps: int = 1000
+    total_mgt: float = _loop_key(50.0, gt=0)
+    max_step_settlement_mm: float = _loop_key(1.0, gt=0)
+    snapshot_every_mgt: float = _loop_key(10.0, gt=0)
+    threshold_sd_mm: float = _loop_key(1.6, gt=0)
+    segment_length_m: float = _loop_key(200.0, gt=0)
+    max_steps: int = _loop_key(1000, gt=0)
     rate_cov: float = 0.3
-    rate_correlation_length: float = 3.0
+    rate_correlation_length_m: float = 3.0
     seed: int | tuple[int, ...] = 0
     rate_factor: tuple[tuple[float, ...], ...] | None = None
     rate_scale: tuple[float, ...] | None = None
-    sleeper_mass: float = 125.5
+    sleeper_mass_kg: float = 125.5
     run: RunOptions = RunOptions()
     rail: str = "60E1"
-    output_spacing: float = 0.02
+    output_spacing_m: float = 0.02
     start: str = "as measured"
     snapshot_mgt: tuple[float, ...] = ()
-    min_step_passages: float = 100.0
+    min_step_passages: float = _loop_key(100.0, gt=0)
     maintenance: MaintenanceOptions | None = None
+
+    @property
+    def max_step_settlement(self) -> float:
+        """``max_step_settlement_mm`` [m]."""
+        return self.max_step_settlement_mm * 1e-3
+
+    @property
+    def segment_length(self) -> float:
+        """``segment_length_m`` [m]."""
+        return self.segment_length_m
+
+    @property
+    def rate_correlation_length(self) -> float:
+        """``rate_correlation_length_m`` [m]."""
+        return self.rate_correlation_length_m
+
+    @property
+    def sleeper_mass(self) -> float:
+        """``sleeper_mass_kg`` [kg]."""
+        return self.sleeper_mass_kg
+
+    @property
+    def output_spacing(self) -> float:
+        """``output_spacing_m`` [m]."""
+        return self.output_spacing_m
+
+    @classmethod
+    def loop_table(cls) -> tuple[str, ...]:
+        """The options that are keys of a scenario file's ``[loop]`` table."""
+        return tuple(name for name, f in cls.model_fields.items()
+                     if isinstance(f.json_schema_extra, dict)
+                     and f.json_schema_extra.get("table") == LOOP_TABLE)  # fmt: skip
+
+    def in_si(self) -> dict:
+        """Every option by name, those with an SI property (above) by its name and value
+        (``max_step_settlement`` [m] for ``max_step_settlement_mm`` [mm], ...)."""
+        out = {}
+        for name in type(self).model_fields:
+            si = name.rsplit("_", 1)[0]
+            key = si if isinstance(getattr(type(self), si, None), property) else name
+            out[key] = getattr(self, key)
+        return out
 
 
 STABLE_GAIN = 1.0
@@ -341,7 +404,8 @@ def predicting(track: Track, traffic, law, options=None, *, zones=(), progress=F
     t0 = time.perf_counter()
     o = options or LoopOptions()
     total = float(require_positive("total_mgt", o.total_mgt))
-    limit = float(require_positive("max_step_settlement", o.max_step_settlement))
+    require_positive("max_step_settlement_mm", o.max_step_settlement_mm)
+    limit = o.max_step_settlement
     every = float(require_positive("snapshot_every_mgt", o.snapshot_every_mgt))
     require_positive("min_step_passages", o.min_step_passages)
     length = track.extent[1] - track.extent[0]
@@ -426,7 +490,7 @@ def predicting(track: Track, traffic, law, options=None, *, zones=(), progress=F
             if per_mgt > 0 and lengths.size == RUNAWAY_STEPS and np.all(lengths * per_mgt < 1):
                 raise TrackdynInputError(
                     f"settlement runs away at {mgt:.3g} MGT: {RUNAWAY_STEPS} steps in a row "
-                    f"shorter than one passage each changed the shape by max_step_settlement; "
+                    f"shorter than one passage each changed the shape by max_step_settlement_mm; "
                     "check the settlement law's parameters"
                 )
             clock = time.perf_counter()
@@ -571,7 +635,7 @@ def _runs(track: Track, traffic, o: LoopOptions):
             raise TrackdynInputError(
                 f"passages_per_mgt must be >= 0, got {shown(t.passages_per_mgt)}"
             )
-        require_positive("speed", t.speed)
+        require_positive("speed_kmh", t.speed_kmh)
         if t.passages_per_mgt > 0:
             load = t.vehicle.static_wheel_load
             if load not in lins:

@@ -283,7 +283,7 @@ def make_dataset(track, history, steps, snap_at, record, timing, traffic, law,
             "settlement_parameters_SI": repr(dataclasses.asdict(law)),
             "passages_per_mgt": ";".join(f"{t.passages_per_mgt:.17g}" for t in traffic),
             "traffic": "; ".join(
-                f"{t.label or t.vehicle.name} at {t.speed * 3.6:g} km/h, "
+                f"{t.label or t.vehicle.name} at {t.speed_kmh:g} km/h, "
                 f"{t.passages_per_mgt:g} passages/MGT"
                 for t in traffic
             ),
@@ -316,8 +316,9 @@ def _first(done, segments: int) -> np.ndarray:
 
 
 def _flat_options(options) -> dict:
-    """Loop options with the run options spelled out as ``run_<name>``."""
-    flat = {name: getattr(options, name) for name in type(options).model_fields}
+    """Loop options in SI (`LoopOptions.in_si`), the run and maintenance options spelled
+    out as ``run_<name>`` and ``maintenance_<name>``."""
+    flat = options.in_si()
     run, maintenance = flat.pop("run"), flat.pop("maintenance")
     flat.update({f"run_{k}": v for k, v in run.model_dump().items()})
     if maintenance is not None:
