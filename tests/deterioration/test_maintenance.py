@@ -7,7 +7,8 @@ import pytest
 
 from trackdyn.deterioration import LoopOptions, Traffic, load_law, predict
 from trackdyn.deterioration.maintenance import Maintenance, MaintenanceOptions
-from trackdyn.deterioration.results import D1Assessment, d1_sd, vehicle_shares
+from trackdyn.deterioration.quality import D1Assessment, d1_sd
+from trackdyn.deterioration.results import vehicle_shares
 from trackdyn.options import RunOptions
 from trackdyn.track.quality import longitudinal_level
 from trackdyn.track.synthetic import synthetic_track

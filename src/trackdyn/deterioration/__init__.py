@@ -6,7 +6,8 @@ start states (tamped, as measured, as surveyed) are `trackdyn.deterioration.star
 """
 
 from trackdyn.deterioration.law_files import load_law
-from trackdyn.deterioration.loop import LoopOptions, Traffic, predict
+from trackdyn.deterioration.loop import predict
+from trackdyn.deterioration.options import LoopOptions, Traffic
 from trackdyn.deterioration.settlement import (
     LAWS,
     PowerLaw,

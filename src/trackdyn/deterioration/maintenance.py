@@ -70,7 +70,7 @@ Characterisation of track geometry. CEN, Brussels.
 from __future__ import annotations
 
 import dataclasses
-from typing import TYPE_CHECKING, Literal
+from typing import Literal
 
 import numpy as np
 from pydantic import (
@@ -83,12 +83,10 @@ from pydantic import (
 )
 from scipy.optimize import brentq
 
+from trackdyn.deterioration.quality import D1Assessment
 from trackdyn.options import Strict
 from trackdyn.track.quality import longitudinal_level
 from trackdyn.track.track import RAILS
-
-if TYPE_CHECKING:  # results imports this module
-    from trackdyn.deterioration.results import D1Assessment
 
 DUE_MARGIN = 0.005
 """Fraction under the threshold at which a segment counts as due at a step end [-]: the
@@ -206,7 +204,7 @@ class Maintenance:
     position : ndarray
         Sleeper positions [m].
     starts, ends : ndarray
-        Segment bounds [m] (`trackdyn.deterioration.results.d1_sd`).
+        Segment bounds [m] (`trackdyn.deterioration.quality.d1_sd`).
     threshold : float
         D1 SD that makes a segment due [mm].
     """
@@ -227,10 +225,8 @@ class Maintenance:
         self._assess: D1Assessment | None = None  # the D1 SD's set-up of the latest call
 
     def d1_sd(self, geometry, extent, segment_length: float) -> np.ndarray:
-        """D1 SD of ``geometry`` (rail, segment) [mm] (`trackdyn.deterioration.results.d1_sd`),
+        """D1 SD of ``geometry`` (rail, segment) [mm] (`trackdyn.deterioration.quality.d1_sd`),
         its filter and segments set up once for every geometry on the same distances."""
-        from trackdyn.deterioration.results import D1Assessment
-
         a = self._assess
         if a is None or (a.extent, a.segment_length) != (tuple(extent), segment_length):
             a = self._assess = D1Assessment(tuple(extent), segment_length)

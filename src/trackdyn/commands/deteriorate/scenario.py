@@ -69,8 +69,8 @@ from pydantic import (
     model_validator,
 )
 
-from trackdyn.deterioration.loop import LoopOptions
 from trackdyn.deterioration.maintenance import MaintenanceOptions
+from trackdyn.deterioration.options import LoopOptions
 from trackdyn.errors import TrackdynInputError
 from trackdyn.limits import MAX_SPEED_KMH
 from trackdyn.options import RunOptions, Strict, load_toml, vehicle_source
@@ -293,7 +293,7 @@ def resolve_inputs(spec: DeteriorationScenario, base: Path):
     """
     from trackdyn.deterioration.law_files import load_law
     from trackdyn.deterioration.loads import cycles_per_passage
-    from trackdyn.deterioration.loop import Traffic
+    from trackdyn.deterioration.options import Traffic
     from trackdyn.track.rails import rail_section
     from trackdyn.vehicle.models import build_model
 
