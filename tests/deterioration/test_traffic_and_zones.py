@@ -8,7 +8,7 @@ import pytest
 
 from trackdyn.deterioration import LAWS, LoopOptions, Traffic, Zone, load_law, predict
 from trackdyn.deterioration.zones import read_zones
-from trackdyn.errors import TrackdynInputError
+from trackdyn.errors import Status, TrackdynInputError, TrackdynNumericalError
 from trackdyn.options import RunOptions
 from trackdyn.track.synthetic import Transition, synthetic_track
 from trackdyn.vehicle.parameters import load_vehicle
@@ -184,6 +184,7 @@ def test_runaway_settlement_is_refused_quickly():
     spot = SoftSpot(centre=30.0, length=8.0, factor=0.45, gap=1.5e-3)
     trk = synthetic_track(60.0, spectrum="fra5", seed=3, features=(spot,))
     law = load_law("power", K_s=10e-3, load_exponent=5.0)
-    with pytest.raises(TrackdynInputError, match="settlement runs away at"):
+    with pytest.raises(TrackdynNumericalError, match="settlement runs away at") as info:
         predict(trk, [wagon(26.0, PASSAGES), wagon(5.0, PASSAGES)], law,
                 options(max_step_settlement_mm=2.0, start="as surveyed"))  # fmt: skip
+    assert info.value.status is Status.SETTLEMENT_RAN_AWAY
