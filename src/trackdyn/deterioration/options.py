@@ -53,7 +53,7 @@ LOOP_TABLE = "loop"
 """Marker of the `LoopOptions` fields that are keys of a scenario file's ``[loop]`` table."""
 
 
-def _loop_key(default, **bounds):
+def loop_key(default, **bounds):
     """A `LoopOptions` field that is also a key of the ``[loop]`` table (`LOOP_TABLE`)."""
     return Field(default, json_schema_extra={"table": LOOP_TABLE}, **bounds)
 
@@ -137,12 +137,12 @@ class LoopOptions(Strict):
 
     model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
 
-    total_mgt: float = _loop_key(50.0, gt=0)
-    max_step_settlement_mm: float = _loop_key(1.0, gt=0)
-    snapshot_every_mgt: float = _loop_key(10.0, gt=0)
-    threshold_sd_mm: float = _loop_key(1.6, gt=0)
-    segment_length_m: float = _loop_key(200.0, gt=0)
-    max_steps: int = _loop_key(1000, gt=0)
+    total_mgt: float = loop_key(50.0, gt=0)
+    max_step_settlement_mm: float = loop_key(1.0, gt=0)
+    snapshot_every_mgt: float = loop_key(10.0, gt=0)
+    threshold_sd_mm: float = loop_key(1.6, gt=0)
+    segment_length_m: float = loop_key(200.0, gt=0)
+    max_steps: int = loop_key(1000, gt=0)
     rate_cov: float = 0.3
     rate_correlation_length_m: float = 3.0
     seed: int | tuple[int, ...] = 0
@@ -154,7 +154,7 @@ class LoopOptions(Strict):
     output_spacing_m: float = 0.02
     start: str = "as measured"
     snapshot_mgt: tuple[float, ...] = ()
-    min_step_passages: float = _loop_key(100.0, gt=0)
+    min_step_passages: float = loop_key(100.0, gt=0)
     maintenance: MaintenanceOptions | None = None
 
     @property
