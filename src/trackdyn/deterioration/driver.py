@@ -64,9 +64,10 @@ def step_together(loops: list, progress: bool = False) -> list[LoopRecord | Fail
     Parameters
     ----------
     loops : list of SectionLoop
-        The sections' loops, started: the driver asks each for its ``runs_wanted``, and
+        The sections' loops, started: the driver asks each for its ``runs_wanted`` and
         gives it their reply (``take_runs``) to ``settle_step`` and ``maintain``, until it
-        is ``done`` (its ``record``).
+        is ``done`` (its ``record``); a step that wants no runs is made at once, so that
+        each round's batch holds the runs of every section that wants any.
     progress : bool
         Show a progress bar over the tonnage of a single section.
 
@@ -80,18 +81,31 @@ def step_together(loops: list, progress: bool = False) -> list[LoopRecord | Fail
     alone = progress and len(loops) == 1
     with progress_bar(alone, loops[0].total if alone else 0.0, "tonnage [MGT]") as bar:
         while active:
-            asked = {i: _phase(results, active, i, loop.runs_wanted)
-                     for i, loop in list(active.items())}  # fmt: skip
-            replies = _run(asked)
-            for i, reply in replies.items():
-                loop = active[i]
-                _phase(results, active, i, _step, loop, reply)
-                if i in active and loop.done:
-                    results[i] = loop.record()
-                    del active[i]
+            asked = {}
+            for i in list(active):
+                request = _phase(results, active, i, _next_request, active[i])
+                if i in active and request is None:
+                    results[i] = active.pop(i).record()
+                elif i in active:
+                    asked[i] = request
+            for i, reply in _run(asked).items():
+                _phase(results, active, i, _step, active[i], reply)
+                if i in active and active[i].done:
+                    results[i] = active.pop(i).record()
             if alone:
                 bar.update(loops[0].mgt)
     return results
+
+
+def _next_request(loop) -> RunRequest | None:
+    """The next runs ``loop`` wants; the steps that want none (every vehicle held) made on
+    the way; None when it is done without."""
+    while not loop.done:
+        request = loop.runs_wanted()
+        if request.vehicles:
+            return request
+        _step(loop, RunReply((), 0.0))
+    return None
 
 
 def _phase(results: list, active: dict, i: int, phase, *args):
@@ -116,18 +130,16 @@ def _step(loop, reply: RunReply) -> None:
     loop.maintain()
 
 
-def _run(asked: dict) -> dict[int, RunReply]:
-    """The runs of every request in one batch, as each loop's reply (a failed loop's
-    request, None, is left out)."""
-    asked = {i: r for i, r in asked.items() if r is not None}
+def _run(asked: dict[int, RunRequest]) -> dict[int, RunReply]:
+    """The runs of every request in one batch, as each loop's reply."""
+    if not asked:
+        return {}
     pairs = [(i, j) for i, r in asked.items() for j in range(len(r.vehicles))]
-    solved: list = []
     clock = time.perf_counter()
-    if pairs:
-        solved = run_batch([asked[i].vehicles[j] for i, j in pairs],
-                           [asked[i].tracks[j] for i, j in pairs],
-                           [asked[i].options[j] for i, j in pairs], keep=KEPT)  # fmt: skip
-    share = (time.perf_counter() - clock) / max(len(pairs), 1)  # split evenly between runs
+    solved = run_batch([asked[i].vehicles[j] for i, j in pairs],
+                       [asked[i].tracks[j] for i, j in pairs],
+                       [asked[i].options[j] for i, j in pairs], keep=KEPT)  # fmt: skip
+    share = (time.perf_counter() - clock) / len(pairs)  # split evenly between the runs
     answers: dict[int, list] = {i: [] for i in asked}
     for (i, _), result in zip(pairs, solved, strict=True):
         answers[i].append(result)

@@ -15,7 +15,7 @@ step start; see `trackdyn.deterioration.accumulation` for how each law sums them
 cycle adds settlement; each vehicle's part is recorded). Zones
 (`trackdyn.deterioration.zones`) give parts of the track their own law and rate field.
 
-Two step sizes. A step (a vehicle run) is as long as ``max_step_settlement`` allows: with
+Two step sizes. A step (a vehicle run) is as long as ``max_step_settlement_mm`` allows: with
 the loads of the step start, the increment is known in closed form for any ``ΔM``, so the
 step is the largest one whose change of the track's shape stays within the limit at
 every sleeper (found by root finding). The shape is what the vehicle feels: the
