@@ -24,6 +24,7 @@ from trackdyn.commands.deteriorate.scenario import MaintenanceSpec, load_deterio
 from trackdyn.commands.deteriorate.sections import section_tasks
 from trackdyn.deterioration.runs import run_section
 from trackdyn.deterioration.settlement import LAWS
+from trackdyn.errors import Failure
 
 
 def run(spec, base):
@@ -32,9 +33,9 @@ def run(spec, base):
     clock = time.perf_counter()
     result = run_section(task)
     wall = time.perf_counter() - clock
-    if "error" in result:
-        raise SystemExit(result["error"])
-    return wall, result["dataset"]
+    if isinstance(result, Failure):
+        raise SystemExit(result.message)
+    return wall, result
 
 
 def report(label: str, wall: float, ds) -> None:

@@ -20,6 +20,7 @@ import numba
 from trackdyn.commands.deteriorate.scenario import load_deterioration
 from trackdyn.commands.deteriorate.sections import section_tasks
 from trackdyn.deterioration.runs import run_section
+from trackdyn.errors import Failure
 from trackdyn.options import RunOptions
 from trackdyn.simulation import run_batch
 from trackdyn.solver import discrete
@@ -86,9 +87,9 @@ def deteriorate(smoke: bool) -> None:
     t = time.perf_counter()
     result = run_section(task)
     wall = time.perf_counter() - t
-    if "error" in result:
-        raise SystemExit(result["error"])
-    a = result["dataset"].attrs
+    if isinstance(result, Failure):
+        raise SystemExit(result.message)
+    a = result.attrs
     parts = ", ".join(
         f"{label} {a[key]:.1f} s"
         for key, label in (("time_vehicle_runs_s", "vehicle runs"),

@@ -21,6 +21,7 @@ from pathlib import Path
 from trackdyn.commands.deteriorate.scenario import load_deterioration
 from trackdyn.commands.deteriorate.sections import section_tasks
 from trackdyn.deterioration.runs import TOGETHER, run_group
+from trackdyn.errors import Failure
 from trackdyn.io import write_geometry, write_supports
 from trackdyn.parallel import run_tasks
 from trackdyn.track.synthetic import synthetic_track
@@ -41,9 +42,8 @@ def write_line(folder: Path, n: int, length: float) -> Path:
 def measured_group(tasks):
     """`run_group`, with the peak resident memory of the process that ran it [MB]."""
     results = run_group(tasks)
-    for result in results:
-        result["peak_MB"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    return results
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    return [r if isinstance(r, Failure) else {"peak_MB": peak} for r in results]
 
 
 def main():
@@ -63,8 +63,8 @@ def main():
             clock = time.perf_counter()
             results = run_tasks(tasks, measured_group, workers=workers, together=TOGETHER)
             times[workers] = time.perf_counter() - clock
-            failed = [r for r in results if "error" in r]
-            assert not failed, failed[0]["error"]
+            failed = [r for r in results if isinstance(r, Failure)]
+            assert not failed, failed[0].message
             peaks[workers] = max(r["peak_MB"] for r in results)
     km = n * length / 1e3
     print(f"{km:g} km as {n} sections, {mgt:g} MGT each")

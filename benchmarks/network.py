@@ -50,6 +50,7 @@ from line import write_line
 from trackdyn.commands.deteriorate.scenario import MaintenanceSpec, load_deterioration
 from trackdyn.commands.deteriorate.sections import section_tasks
 from trackdyn.deterioration.runs import TOGETHER, run_group
+from trackdyn.errors import Failure
 from trackdyn.parallel import run_tasks
 
 GOAL_CORE_S = 9600.0
@@ -68,15 +69,17 @@ def measured_group(tasks):
         "system_s": (os.times().system - times.system) / len(tasks),
         "pid": os.getpid(),
     }
-    for result in results:
-        result.update(share)
-        if "dataset" in result:
-            ds = result.pop("dataset")  # only what the benchmark reads comes back
-            result["steps"] = int(ds.attrs["steps"])
-            result["tampings"] = int(ds.sizes.get("intervention", 0))
-            for key in ("time_vehicle_runs_s", "time_beam_solves_s", "time_bookkeeping_s"):
-                result[key] = float(ds.attrs.get(key, 0.0))
-    return results
+    out: list = []
+    for ds in results:
+        if isinstance(ds, Failure):
+            out.append(ds)
+            continue
+        result = {**share, "steps": int(ds.attrs["steps"])}  # only what the benchmark reads
+        result["tampings"] = int(ds.sizes.get("intervention", 0))
+        for key in ("time_vehicle_runs_s", "time_beam_solves_s", "time_bookkeeping_s"):
+            result[key] = float(ds.attrs.get(key, 0.0))
+        out.append(result)
+    return out
 
 
 def _stop(proc: subprocess.Popen) -> None:
@@ -233,9 +236,9 @@ def run_line(tasks, address, km, mgt, workers) -> Timing:
     clock = time.perf_counter()
     results = run_tasks(tasks, measured_group, scheduler=address, together=TOGETHER)
     wall = time.perf_counter() - clock
-    failed = [r for r in results if "error" in r]
+    failed = [r for r in results if isinstance(r, Failure)]
     if failed:
-        raise SystemExit(f"section {failed[0]['name']}: {failed[0]['error']}")
+        raise SystemExit(failed[0].message)
     assert len({r["pid"] for r in results}) == workers, "not every worker ran sections"
     return Timing(km, mgt, workers, wall, results)
 
@@ -267,9 +270,9 @@ def single_runs(folder: Path, n: int, length: float, mgt: float, repeat: int) ->
     cpu, wall = time.process_time(), time.perf_counter()
     results = run_tasks(tasks, measured_group, workers=1, together=TOGETHER)
     cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
-    failed = [r for r in results if "error" in r]
+    failed = [r for r in results if isinstance(r, Failure)]
     if failed:
-        raise SystemExit(f"section {failed[0]['name']}: {failed[0]['error']}")
+        raise SystemExit(failed[0].message)
     after = one_run()
     run_cpu, run_wall = min(before[0], after[0]), min(before[1], after[1])
     km = n * length / 1e3

@@ -66,10 +66,10 @@ def main():
     opts = parser.parse_args()
     total, model = (2.0, "7dof") if opts.smoke else (50.0, "11dof")
     marks = [m for m in (10.0, 50.0) if m <= total] or [total]
-    traffic = [Traffic(load_vehicle(v), 60 / 3.6, 8065.0, v) for v in ("loaded", "empty")]
+    traffic = [Traffic(load_vehicle(v), 60.0, 8065.0, v) for v in ("loaded", "empty")]
     track = transition_track()
     options = LoopOptions(run=RunOptions(model=model), rate_cov=0.0, total_mgt=total,
-                          snapshot_every_mgt=10.0, segment_length=100.0)  # fmt: skip
+                          snapshot_every_mgt=10.0, segment_length_m=100.0)  # fmt: skip
     print(f"transition 60 -> 240 kN/mm, {model}, {total:g} MGT (settlement in mm)")
     for name in LAWS:
         clock = time.perf_counter()

@@ -80,9 +80,9 @@ def folder(tmp_path_factory):
     path = tmp_path_factory.mktemp("cal")
     spot = SoftSpot(centre=100.0, length=8.0, factor=0.45, gap=1.5e-3)
     trk = synthetic_track(200.0, spectrum="fra5", seed=3, features=(spot,))
-    traffic = [Traffic(load_vehicle(v), SPEED / 3.6, 8065.0, v) for v in ("loaded", "empty")]
-    options = LoopOptions(run=RunOptions(model="7dof"), rate_cov=0.0, segment_length=100.0,
-                          max_step_settlement=2e-3, start="as surveyed")  # fmt: skip
+    traffic = [Traffic(load_vehicle(v), SPEED, 8065.0, v) for v in ("loaded", "empty")]
+    options = LoopOptions(run=RunOptions(model="7dof"), rate_cov=0.0, segment_length_m=100.0,
+                          max_step_settlement_mm=2.0, start="as surveyed")  # fmt: skip
     surveys = synthetic_surveys(trk, traffic, load_law("power", **TRUE), options, MGT,
                                 noise=NOISE, offset=OFFSET, seed=7)  # fmt: skip
     write_supports(trk.supports, path / "supports.csv")

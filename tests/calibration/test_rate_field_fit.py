@@ -36,9 +36,9 @@ def fitted(request, tmp_path_factory):
     path = tmp_path_factory.mktemp("field")
     spot = SoftSpot(centre=100.0, length=8.0, factor=0.45, gap=1.5e-3)
     trk = synthetic_track(200.0, spectrum="fra5", seed=3, features=(spot,))
-    traffic = [Traffic(load_vehicle(v), 60 / 3.6, 8065.0, v) for v in ("loaded", "empty")]
+    traffic = [Traffic(load_vehicle(v), 60.0, 8065.0, v) for v in ("loaded", "empty")]
     options = LoopOptions(run=RunOptions(model="7dof"), rate_cov=0.3, seed=request.param,
-                          segment_length=100.0, max_step_settlement=2e-3,
+                          segment_length_m=100.0, max_step_settlement_mm=2.0,
                           start="as surveyed")  # fmt: skip
     law = load_law("power", **TRUE)
     for k, survey in enumerate(synthetic_surveys(trk, traffic, law, options, MGT, seed=7)):

@@ -33,7 +33,7 @@ def test_a_two_axle_model_counts_one_cycle_per_wheel(monkeypatch):
     # rail would count each wheel twice)
     assert model.axles_per_rail == 2
     np.testing.assert_array_equal(cycles_per_passage(model), np.ones(4))
-    traffic = Traffic(LOADED, 60 / 3.6, 100.0, "two-axle")
+    traffic = Traffic(LOADED, 60.0, 100.0, "two-axle")
     assert traffic.gross_mass("two-axle") == LOADED.m1 + 2 * LOADED.mw
 
 
@@ -42,7 +42,7 @@ def test_bogie_models_stand_for_four_axles_per_rail():
     np.testing.assert_array_equal(cycles_per_passage(build_model("7dof", LOADED)), np.ones(8))
     np.testing.assert_array_equal(cycles_per_passage(build_model("4dof", LOADED)), np.full(4, 2.0))
     gross = LOADED.m1 + 2 * LOADED.m2 + 2 * LOADED.mw
-    assert Traffic(LOADED, 60 / 3.6, 100.0).gross_mass("11dof") == gross
+    assert Traffic(LOADED, 60.0, 100.0).gross_mass("11dof") == gross
 
 
 @pytest.mark.parametrize(("vehicle", "tolerance"), [("loaded", 0.005), ("empty", 0.012)])

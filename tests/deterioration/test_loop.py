@@ -4,6 +4,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+from pydantic import ValidationError
 
 from trackdyn.deterioration import LoopOptions, Traffic, load_law, predict
 from trackdyn.deterioration.loop import shape_change, shape_sleepers
@@ -14,8 +15,8 @@ from trackdyn.vehicle.parameters import load_vehicle
 
 PASSAGES = 8065.0  # 1e6 t / (104 t + 20 t), the example's coal traffic [per MGT]
 LAW = load_law("power")  # the shipped illustrative parameters
-LOADED = Traffic(load_vehicle("loaded"), 60 / 3.6, PASSAGES, "loaded")
-EMPTY = Traffic(load_vehicle("empty"), 60 / 3.6, PASSAGES, "empty")
+LOADED = Traffic(load_vehicle("loaded"), 60.0, PASSAGES, "loaded")
+EMPTY = Traffic(load_vehicle("empty"), 60.0, PASSAGES, "empty")
 
 
 def options(**kw):
@@ -24,7 +25,7 @@ def options(**kw):
         "rate_cov": 0.0,  # uniform ballast unless a test asks for the rate field
         "total_mgt": 5.0,
         "snapshot_every_mgt": 2.5,
-        "segment_length": 60.0,
+        "segment_length_m": 60.0,
     }
     return LoopOptions(**{**base, **kw})
 
@@ -36,7 +37,7 @@ def uniform():
 
 
 def test_no_traffic_no_settlement(uniform):
-    for traffic in ([], [Traffic(LOADED.vehicle, LOADED.speed, 0.0)]):
+    for traffic in ([], [Traffic(LOADED.vehicle, LOADED.speed_kmh, 0.0)]):
         ds = predict(uniform, traffic, LAW, options())
         assert np.all(ds.settlement.values == 0.0)
         np.testing.assert_array_equal(ds.profile.isel(snapshot=-1), ds.profile.isel(snapshot=0))
@@ -50,7 +51,7 @@ def test_uniform_level_track_stays_level(uniform, traffic):
     level. Within 6 m of the ends the bogie's other axle is off the section (the run does
     not reach there), which changes the loads by up to 0.5 % (measured)."""
     ds = predict(uniform, traffic, LAW, options(total_mgt=50.0, snapshot_every_mgt=25.0,
-                                                max_step_settlement=5e-3))  # fmt: skip
+                                                max_step_settlement_mm=5.0))  # fmt: skip
     e = ds.settlement.isel(mgt=-1)
     x = ds.sleeper_distance
     inner = e.where((x > 6.0) & (x < 114.0), drop=True).values
@@ -84,24 +85,25 @@ def spot_track():
 
 
 def _at_50_mgt(trk, limit):
+    """The track through 50 MGT with steps of at most ``limit`` [mm]."""
     return predict(trk, [LOADED, EMPTY], LAW, options(total_mgt=50.0, snapshot_every_mgt=25.0,
-                                                      max_step_settlement=limit))  # fmt: skip
+                                                      max_step_settlement_mm=limit))  # fmt: skip
 
 
 @pytest.fixture(scope="module")
 def fine(spot_track):
     """The spot track through 50 MGT with steps of at most 0.25 mm."""
-    return _at_50_mgt(spot_track, 0.25e-3)
+    return _at_50_mgt(spot_track, 0.25)
 
 
-DEFAULT_LIMIT = LoopOptions().max_step_settlement
+DEFAULT_LIMIT = LoopOptions().max_step_settlement_mm  # [mm]
 
 
 def test_a_quarter_of_the_default_step_limit_changes_50_mgt_settlement_by_under_2_percent(
     spot_track, fine
 ):
     """Measured: 1.2 % at most at any sleeper (8 steps against 28)."""
-    assert DEFAULT_LIMIT == 4 * 0.25e-3  # the fine run's limit is a quarter of the default
+    assert DEFAULT_LIMIT == 4 * 0.25  # the fine run's limit is a quarter of the default
     coarse = _at_50_mgt(spot_track, DEFAULT_LIMIT)
     assert fine.attrs["steps"] > coarse.attrs["steps"]
     e_coarse, e_fine = (r.settlement.isel(mgt=-1).values for r in (coarse, fine))
@@ -112,8 +114,9 @@ def test_a_quarter_of_the_default_step_limit_changes_50_mgt_settlement_by_under_
     e, pos = coarse.settlement.values, coarse.sleeper_distance.values
     size = shape_sleepers(pos)
     change = [shape_change(e[k + 1] - e[k], size).max() for k in range(1, e.shape[0] - 1)]
-    assert max(change) <= DEFAULT_LIMIT * 1.05
-    assert coarse.step_max_settlement.values[1:].max() > DEFAULT_LIMIT  # even settlement is free
+    assert max(change) <= DEFAULT_LIMIT * 1e-3 * 1.05
+    # even settlement is free
+    assert coarse.step_max_settlement.values[1:].max() > DEFAULT_LIMIT * 1e-3
 
 
 def _saw(e):
@@ -129,7 +132,7 @@ def test_a_large_step_limit_is_held_to_the_stable_step(spot_track, fine):
     largest sleeper-to-sleeper step within 10 % (measured 5 %). Without the stable step,
     5 mm steps make settlement alternate from sleeper to sleeper (measured: the largest
     sleeper-to-sleeper step about 3 times that of fine steps)."""
-    large = _at_50_mgt(spot_track, 5e-3)
+    large = _at_50_mgt(spot_track, 5.0)
     e_large, e_fine = (r.settlement.isel(mgt=-1).values for r in (large, fine))
     assert np.max(np.abs(e_large - e_fine) / e_fine) < 0.08
     assert _saw(e_large) < 1.1 * _saw(e_fine)
@@ -165,10 +168,12 @@ def test_rate_field_is_seeded_lognormal(uniform):
 
 
 def test_bad_options(uniform):
+    with pytest.raises(ValidationError, match="total_mgt"):  # the model's bound, as a file's
+        options(total_mgt=-5.0)
     with pytest.raises(TrackdynInputError, match="total_mgt must be finite and > 0"):
-        predict(uniform, [LOADED], LAW, options(total_mgt=-5.0))
+        predict(uniform, [LOADED], LAW, options(total_mgt=np.inf))
     with pytest.raises(TrackdynInputError, match="passages_per_mgt must be >= 0"):
-        predict(uniform, [Traffic(LOADED.vehicle, 10.0, -1.0)], LAW, options())
+        predict(uniform, [Traffic(LOADED.vehicle, 36.0, -1.0)], LAW, options())
     with pytest.raises(TrackdynInputError, match="no contact on the right rail"):
         predict(uniform, [LOADED], LAW, options(run=RunOptions(model="2dof")))
     spot = synthetic_track(120.0, spectrum=None, stiffness_cov=0.0, seed=1,

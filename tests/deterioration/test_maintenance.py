@@ -7,7 +7,8 @@ import pytest
 
 from trackdyn.deterioration import LoopOptions, Traffic, load_law, predict
 from trackdyn.deterioration.maintenance import Maintenance, MaintenanceOptions
-from trackdyn.deterioration.results import D1Assessment, d1_sd, vehicle_shares
+from trackdyn.deterioration.quality import D1Assessment, d1_sd
+from trackdyn.deterioration.results import vehicle_shares
 from trackdyn.options import RunOptions
 from trackdyn.track.quality import longitudinal_level
 from trackdyn.track.synthetic import synthetic_track
@@ -20,7 +21,7 @@ def wagon(axle_t: float, passages: float, speed_kmh: float = 60.0) -> Traffic:
     """The loaded coal wagon's suspension with the body mass for ``axle_t`` t per axle."""
     base = load_vehicle("loaded")
     m1 = 4 * axle_t * 1e3 - 2 * base.m2 - 2 * base.mw  # gross = m1 + 2 m2 + 2 mw
-    return Traffic(load_vehicle("loaded", m1=m1), speed_kmh / 3.6, passages, f"{axle_t:g} t")
+    return Traffic(load_vehicle("loaded", m1=m1), speed_kmh, passages, f"{axle_t:g} t")
 
 
 @pytest.fixture(scope="module")
@@ -137,10 +138,10 @@ def test_tampings_do_not_depend_on_the_step_size():
     5 tampings against 7, and tonnages differed by 5 %)."""
     track = synthetic_track(200.0, spectrum="fra5", seed=7)
     runs = []
-    for limit in (LoopOptions().max_step_settlement, 0.25e-3):
+    for limit in (LoopOptions().max_step_settlement_mm, 0.25):
         o = options(maintenance=MaintenanceOptions(), total_mgt=100.0, snapshot_every_mgt=100.0,
-                    rate_cov=0.3, threshold_sd_mm=1.5, segment_length=100.0,
-                    start="as measured", max_step_settlement=limit)  # fmt: skip
+                    rate_cov=0.3, threshold_sd_mm=1.5, segment_length_m=100.0,
+                    start="as measured", max_step_settlement_mm=limit)  # fmt: skip
         runs.append(predict(track, [wagon(26.0, 8065.0)], LAW, o))
     coarse, fine = runs
     np.testing.assert_array_equal(coarse.intervention_segment, fine.intervention_segment)
@@ -149,7 +150,7 @@ def test_tampings_do_not_depend_on_the_step_size():
 
 def options(**kw):
     base = {"run": RunOptions(model="4dof"), "total_mgt": 30.0, "snapshot_every_mgt": 10.0,
-            "segment_length": 60.0, "start": "tamped"}  # fmt: skip
+            "segment_length_m": 60.0, "start": "tamped"}  # fmt: skip
     return LoopOptions(**{**base, **kw})
 
 
@@ -173,7 +174,7 @@ def _intervals(damage: float, total: float) -> np.ndarray:
     uniform = synthetic_track(120.0, spectrum=None, stiffness_cov=0.0, gap=0.0, seed=1)
     m = MaintenanceOptions(damage_per_tamping=damage, kept_correlation=1.0)
     o = options(maintenance=m, total_mgt=total, snapshot_every_mgt=total, rate_cov=0.3,
-                threshold_sd_mm=1.5, segment_length=100.0, start="as measured")  # fmt: skip
+                threshold_sd_mm=1.5, segment_length_m=100.0, start="as measured")  # fmt: skip
     ds = predict(uniform, [wagon(26.0, 8065.0)], LAW, o)
     assert np.all(ds.intervention_segment.values == 0)
     return np.diff(np.r_[0.0, ds.intervention_mgt.values])
@@ -216,8 +217,8 @@ def test_a_transition_needs_several_times_the_tamping_of_open_track():
              Zone(270.0, 280.0, "approach", load_law("power", kind="approach"))]  # fmt: skip
     m = MaintenanceOptions()
     o = options(maintenance=m, total_mgt=150.0, snapshot_every_mgt=50.0, rate_cov=0.3,
-                threshold_sd_mm=1.5, segment_length=100.0, start="as measured",
-                max_step_settlement=1e-3, max_steps=3000)  # fmt: skip
+                threshold_sd_mm=1.5, segment_length_m=100.0, start="as measured",
+                max_step_settlement_mm=1.0, max_steps=3000)  # fmt: skip
     ds = predict(track, [wagon(26.0, 8065.0)], LAW, o, zones=zones)
     count = ds.interventions.values
     assert count[2] > 2 * max(count[1], 1)  # 200-300 m holds the deck; 100-200 m open
@@ -232,7 +233,7 @@ def test_vehicle_shares_add_up_and_follow_the_equivalent_cycles():
     with no passages has no share; the shares add up to 1."""
     level = synthetic_track(60.0, spectrum=None, stiffness_cov=0.0, gap=0.0, seed=1)
     mix = [wagon(26.0, 1000.0, 20.0), wagon(13.0, 3000.0, 20.0), wagon(20.0, 0.0, 20.0)]
-    o = options(total_mgt=2.0, snapshot_every_mgt=1.0, segment_length=30.0, rate_cov=0.0)
+    o = options(total_mgt=2.0, snapshot_every_mgt=1.0, segment_length_m=30.0, rate_cov=0.0)
     shares = vehicle_shares(predict(level, mix, LAW, o))
     assert shares["settlement_share"].sum() == pytest.approx(1.0, rel=1e-9)
     assert shares["settlement_share"].iloc[2] == 0.0

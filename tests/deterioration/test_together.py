@@ -15,6 +15,7 @@ import xarray as xr
 
 from trackdyn.deterioration import LoopOptions, Traffic, load_law
 from trackdyn.deterioration.runs import Section, SectionTask, run_group, run_section
+from trackdyn.errors import Failure, Status, TrackdynNumericalError
 from trackdyn.io import write_geometry, write_supports
 from trackdyn.options import RunOptions
 from trackdyn.parallel import groups, run_tasks
@@ -24,8 +25,8 @@ from trackdyn.vehicle.parameters import load_vehicle
 
 PASSAGES = 8065.0  # 1e6 t / (104 t + 20 t), the example's coal traffic [per MGT]
 TRAFFIC = (
-    Traffic(load_vehicle("loaded"), 60 / 3.6, PASSAGES, "loaded"),
-    Traffic(load_vehicle("empty"), 60 / 3.6, PASSAGES, "empty"),
+    Traffic(load_vehicle("loaded"), 60.0, PASSAGES, "loaded"),
+    Traffic(load_vehicle("empty"), 60.0, PASSAGES, "empty"),
 )
 
 
@@ -42,7 +43,7 @@ def tasks(tmp_path_factory):
         write_geometry(trk.geometry, geometry)
         write_supports(trk.supports, supports)
         options = LoopOptions(run=RunOptions(model="11dof"), total_mgt=10.0,
-                              snapshot_every_mgt=5.0, segment_length=50.0, seed=i)  # fmt: skip
+                              snapshot_every_mgt=5.0, segment_length_m=50.0, seed=i)  # fmt: skip
         section = Section(f"s{i}", str(geometry), str(supports))
         out.append(SectionTask(section, TRAFFIC, load_law("power"), options))
     return out
@@ -67,11 +68,10 @@ def test_sections_stepped_together_give_what_each_gives_alone(tasks, monkeypatch
     assert in_lanes, batches  # the lanes were used
     for result, task in zip(together, tasks, strict=True):
         alone = run_section(task)
-        assert result["name"] == alone["name"] == task.section.name
-        xr.testing.assert_identical(without_times(result["dataset"]),
-                                    without_times(alone["dataset"]))  # fmt: skip
-    first = together[0]["dataset"].settlement.isel(mgt=-1).values
-    assert not np.allclose(first, together[1]["dataset"].settlement.isel(mgt=-1).values)
+        assert result.attrs["section"] == alone.attrs["section"] == task.section.name
+        xr.testing.assert_identical(without_times(result), without_times(alone))
+    first = together[0].settlement.isel(mgt=-1).values
+    assert not np.allclose(first, together[1].settlement.isel(mgt=-1).values)
 
 
 def test_a_section_that_fails_stops_alone(tasks):
@@ -80,16 +80,19 @@ def test_a_section_that_fails_stops_alone(tasks):
     short = tasks[1].options.model_copy(update={"max_steps": 1})
     broken = [tasks[0], dataclasses.replace(tasks[1], options=short), tasks[2]]
     results = run_group(broken)
-    assert "dataset" not in results[1] and "max_steps = 1" in results[1]["error"]
+    assert isinstance(results[1], Failure) and results[1].status is Status.INPUT_REFUSED
+    assert results[1].message.startswith("section s1: more than max_steps = 1 steps")
     for i in (0, 2):
-        xr.testing.assert_identical(without_times(results[i]["dataset"]),
-                                    without_times(run_section(tasks[i])["dataset"]))  # fmt: skip
+        xr.testing.assert_identical(without_times(results[i]),
+                                    without_times(run_section(tasks[i])))  # fmt: skip
 
 
 def test_a_section_whose_files_fail_is_reported_and_the_others_run(tasks):
     missing = dataclasses.replace(tasks[0].section, geometry="nope.csv")
     results = run_group([dataclasses.replace(tasks[0], section=missing), tasks[2]])
-    assert "nope.csv" in results[0]["error"] and "dataset" in results[1]
+    assert isinstance(results[0], Failure) and "nope.csv" in results[0].message
+    assert results[0].message.startswith("section s0: ")
+    assert isinstance(results[1], xr.Dataset)
 
 
 @pytest.mark.parametrize(
@@ -114,3 +117,31 @@ def test_groups_go_through_a_cluster_in_order():
     # group's results come back in the tasks' order
     assert [len(g) for g in groups(list(range(7)), 3, 2)] == [2, 2, 1, 1, 1]
     assert run_tasks(list(range(7)), list, workers=2, together=3) == list(range(7))
+
+
+def test_a_numerical_failure_keeps_its_status_and_names_its_section(tasks, monkeypatch):
+    """Load updates beyond `MAX_LOAD_UPDATES` in a step (here none allowed) are a numerical
+    failure (settlement ran away), not refused input; `run_sections` raises the first
+    failed section's, naming it and counting the others."""
+    from trackdyn.deterioration import loop
+    from trackdyn.deterioration.runs import run_sections
+
+    monkeypatch.setattr(loop, "MAX_LOAD_UPDATES", 0)
+    (failed,) = run_group([tasks[0]])
+    assert isinstance(failed, Failure) and failed.status is Status.SETTLEMENT_RAN_AWAY
+    assert failed.message.startswith("section s0: more than 0 load updates needed")
+    with pytest.raises(TrackdynNumericalError, match=r"^section s0: more than 0 load ") as info:
+        run_sections(tasks[:2], workers=1)
+    assert str(info.value).endswith(" (1 more sections failed)")
+    assert info.value.status is Status.SETTLEMENT_RAN_AWAY
+
+
+def test_a_failed_vehicle_run_stops_its_section_with_the_run_s_status(tasks, monkeypatch):
+    """A vehicle run that comes back as a `Failure` (`trackdyn.simulation.run_batch`)
+    stops its section with that failure's status and message."""
+    from trackdyn.deterioration import driver
+
+    diverged = Failure(Status.NEWTON_DIVERGED, "Newton iteration did not converge")
+    monkeypatch.setattr(driver, "run_batch", lambda vehicles, *_, **__: [diverged] * len(vehicles))
+    (failed,) = run_group([tasks[0]])
+    assert failed == diverged.named("section s0")

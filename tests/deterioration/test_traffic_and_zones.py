@@ -8,7 +8,7 @@ import pytest
 
 from trackdyn.deterioration import LAWS, LoopOptions, Traffic, Zone, load_law, predict
 from trackdyn.deterioration.zones import read_zones
-from trackdyn.errors import TrackdynInputError
+from trackdyn.errors import Status, TrackdynInputError, TrackdynNumericalError
 from trackdyn.options import RunOptions
 from trackdyn.track.synthetic import Transition, synthetic_track
 from trackdyn.vehicle.parameters import load_vehicle
@@ -20,12 +20,12 @@ def wagon(axle_t: float, passages: float) -> Traffic:
     """The loaded coal wagon's suspension with the body mass for ``axle_t`` t per axle."""
     base = load_vehicle("loaded")
     m1 = 4 * axle_t * 1e3 - 2 * base.m2 - 2 * base.mw  # gross = m1 + 2 m2 + 2 mw
-    return Traffic(load_vehicle("loaded", m1=m1), 60 / 3.6, passages, f"{axle_t:.0f} t")
+    return Traffic(load_vehicle("loaded", m1=m1), 60.0, passages, f"{axle_t:.0f} t")
 
 
 def options(**kw):
     base = {"run": RunOptions(model="4dof"), "rate_cov": 0.0, "total_mgt": 2.0,
-            "snapshot_every_mgt": 1.0, "segment_length": 30.0}  # fmt: skip
+            "snapshot_every_mgt": 1.0, "segment_length_m": 30.0}  # fmt: skip
     return LoopOptions(**{**base, **kw})
 
 
@@ -184,6 +184,7 @@ def test_runaway_settlement_is_refused_quickly():
     spot = SoftSpot(centre=30.0, length=8.0, factor=0.45, gap=1.5e-3)
     trk = synthetic_track(60.0, spectrum="fra5", seed=3, features=(spot,))
     law = load_law("power", K_s=10e-3, load_exponent=5.0)
-    with pytest.raises(TrackdynInputError, match="settlement runs away at"):
+    with pytest.raises(TrackdynNumericalError, match="settlement runs away at") as info:
         predict(trk, [wagon(26.0, PASSAGES), wagon(5.0, PASSAGES)], law,
-                options(max_step_settlement=2e-3, start="as surveyed"))  # fmt: skip
+                options(max_step_settlement_mm=2.0, start="as surveyed"))  # fmt: skip
+    assert info.value.status is Status.SETTLEMENT_RAN_AWAY

@@ -112,8 +112,8 @@ def test_deterioration_on_the_discrete_track():
     trk = synthetic_track(120.0, spectrum=None, stiffness_cov=0.0, gap=0.0, seed=1,
                           features=(VoidedSleepers(60.0, 1, 1.0e-3, "both"),))  # fmt: skip
     options = LoopOptions(run=RunOptions(model="7dof", track="discrete"), rate_cov=0.0,
-                          total_mgt=2.0, snapshot_every_mgt=1.0, segment_length=60.0)  # fmt: skip
-    ds = predict(trk, [Traffic(VEHICLE, 60 / 3.6, 8065.0, "loaded")], load_law("power"), options)
+                          total_mgt=2.0, snapshot_every_mgt=1.0, segment_length_m=60.0)  # fmt: skip
+    ds = predict(trk, [Traffic(VEHICLE, 60.0, 8065.0, "loaded")], load_law("power"), options)
     x = ds.sleeper_distance.values
     v, far = int(np.argmin(np.abs(x - 60.0))), int(np.argmin(np.abs(x - 30.0)))
     load = ds.peak_rail_seat_load.isel(step=0, rail=0).values
@@ -186,11 +186,11 @@ def test_a_closing_void_on_the_discrete_track_follows_the_quasi_static_loop():
 
     trk = synthetic_track(120.0, spectrum=None, stiffness_cov=0.0, gap=0.0, seed=1,
                           features=(VoidedSleepers(60.0, 1, 1.0e-3, "both"),))  # fmt: skip
-    traffic = [Traffic(VEHICLE, 60 / 3.6, 8065.0, "loaded")]
+    traffic = [Traffic(VEHICLE, 60.0, 8065.0, "loaded")]
     settled = {}
     for track in ("winkler", "discrete"):
         options = LoopOptions(run=RunOptions(model="7dof", track=track), rate_cov=0.0,
-                              total_mgt=100 / 8065.0, segment_length=60.0)  # fmt: skip
+                              total_mgt=100 / 8065.0, segment_length_m=60.0)  # fmt: skip
         ds = predict(trk, traffic, load_law("power"), options)
         x = ds.sleeper_distance.values
         v, far = int(np.argmin(np.abs(x - 60.0))), int(np.argmin(np.abs(x - 30.0)))

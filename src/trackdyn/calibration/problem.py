@@ -56,7 +56,7 @@ from trackdyn.deterioration.runs import (
     run_group,
     run_sections,
 )
-from trackdyn.errors import TrackdynInputError
+from trackdyn.errors import Failure, TrackdynInputError
 from trackdyn.io import read_supports
 from trackdyn.track.quality import WAVEBANDS
 from trackdyn.track.rails import rail_section
@@ -313,7 +313,7 @@ def run_laws(problem: Calibration, laws, options, *, workers=None, scheduler=Non
 
     results = run_tasks(tasks, run_group, workers=workers, scheduler=scheduler, label="runs",
                         together=TOGETHER)  # fmt: skip
-    return [r.get("dataset", r.get("error")) for r in results]
+    return [r.message if isinstance(r, Failure) else r for r in results]
 
 
 @dataclass(frozen=True)

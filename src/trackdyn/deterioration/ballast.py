@@ -113,7 +113,7 @@ def rate_field(n: int, spacing: float, cov: float, correlation_length: float, se
         )
     if not 0 < correlation_length < np.inf:
         raise TrackdynInputError(
-            f"rate_correlation_length must be > 0, got {shown(correlation_length)}"
+            f"rate_correlation_length_m must be > 0, got {shown(correlation_length)}"
         )
     rng = np.random.default_rng(seed)
     common = correlated_field(n, spacing, correlation_length, rng)

@@ -27,12 +27,14 @@ than the far sleepers.
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
 
+from trackdyn.deterioration.ballast import BallastState
 from trackdyn.errors import TrackdynInputError
-from trackdyn.simulation import run_batch, time_step
+from trackdyn.simulation import Run, time_step
 from trackdyn.solver.discrete import stable_step
 from trackdyn.track.discrete import DiscreteParameters, discrete_track
 from trackdyn.track.track import RAILS, LinearisedTrack
@@ -233,8 +235,68 @@ class StepLoads:
         return np.maximum(self.dynamic + now - self.start, 0.0)
 
 
+class PlacedLoads:
+    """Load cycles of one run on the Winkler track as the ballast settles: its wheel loads
+    placed on the rail beam's windows once (`wheel_forces`), solved on each ballast state
+    (`passage_loads`).
+
+    Parameters
+    ----------
+    run : trackdyn.simulation.Run
+        The solved run.
+    model : trackdyn.vehicle.assembly.Model
+        The model of the run.
+    ballast : Ballast
+        The section's rails and ballast.
+    previous : PlacedLoads, optional
+        The same vehicle's loads of its run before: the first solve starts from their
+        latest closed supports.
+    """
+
+    placed: list
+
+    def __init__(self, run, model, ballast, previous: PlacedLoads | None = None):
+        self.ballast = ballast
+        self.placed = wheel_forces(
+            run, ballast, model, None if previous is None else previous.placed
+        )
+
+    def at(self, state) -> np.ndarray:
+        """Load cycles on ``state``, (wheels, sleepers) [N]."""
+        return passage_loads(self.placed, self.ballast, state)
+
+
+@dataclass
+class Latest:
+    """A vehicle's latest run and the load cycles that came of it.
+
+    Parameters
+    ----------
+    run : trackdyn.simulation.Run
+        The run.
+    state : BallastState
+        The ballast state it ran on.
+    before : PlacedLoads or StepLoads, optional
+        The loads of the vehicle's run before (until this run's are placed).
+    source : PlacedLoads or StepLoads, optional
+        This run's loads on the rail beam, placed when first needed.
+    loads : ndarray, optional
+        Its latest load cycles (wheels, sleepers) [N].
+    """
+
+    run: Run
+    state: BallastState
+    before: PlacedLoads | StepLoads | None = None
+    source: PlacedLoads | StepLoads | None = None
+    loads: np.ndarray | None = None
+
+
 class TrafficRun:
     """One vehicle of the traffic, run over the track as it stands at each step.
+
+    Set up once: the vehicle model, its load cycles per passage, and the run options
+    (time step, stored samples); ``latest`` is its latest run (`Latest`), ``held`` whether
+    the loop keeps it (and its load cycles) for the next step.
 
     Parameters
     ----------
@@ -249,7 +311,7 @@ class TrafficRun:
     """
 
     def __init__(self, traffic, lin: LinearisedTrack, options, vehicle: int = 0):
-        self.traffic, self.lin, self.options, self.vehicle = traffic, lin, options, vehicle
+        self.traffic, self.lin, self.vehicle = traffic, lin, vehicle
         self.model = build_model(options.run.model, traffic.vehicle)
         self.weights = cycles_per_passage(self.model) * traffic.passages_per_mgt
         self.rails = [RAILS.index(r) for _, _, r in wheels(self.model)]
@@ -260,159 +322,67 @@ class TrafficRun:
             load = traffic.vehicle.static_wheel_load
             dt = min(dt, stable_step(discrete_track(lin, self.discrete), load))
         every = max(1, int(options.output_spacing / (traffic.speed * dt)))
-        self.run = options.run.with_(speed_kmh=traffic.speed * 3.6, dt_s=dt, store_every=every)
-        self.state = None  # the ballast state of its latest run on the discrete track
-        self.step: StepLoads | None = None
-        self.placed: tuple | None = None  # (solved run, its `wheel_forces`)
-        self.solved = None  # its latest run
-        self.loads: np.ndarray | None = None  # its latest load cycles (wheels, sleepers)
-        self.held = False  # keep its latest run and load cycles (the loop decides)
+        self.run = options.run.with_(speed_kmh=traffic.speed_kmh, dt_s=dt, store_every=every)
+        self.latest: Latest | None = None
+        self.held = False
 
     @property
     def keeps(self) -> bool:
         """Held, with a latest run to keep (its run and load cycles stand this step)."""
-        return self.held and self.solved is not None
+        return self.held and self.latest is not None
+
+    def track(self, lin: LinearisedTrack, ballast, state):
+        """The track of its next run: ``lin``, the current track linearised about its static
+        wheel load, or the discrete track on the ballast's rail-seat stiffness and
+        ``state``'s gaps (``[run] track = "discrete"``)."""
+        if self.run.track != "discrete":
+            return lin
+        return discrete_track(lin, self.discrete, stiffness=ballast.stiffness, gap=state.gap)
+
+    def ran(self, run: Run, state) -> None:
+        """Take its new ``run``, made on the ballast ``state``."""
+        self.latest = Latest(run, state, None if self.latest is None else self.latest.source)
+
+    def loads_at(self, ballast, state) -> np.ndarray:
+        """Its load cycles on ``state`` (wheels, sleepers) [N]: those of its latest run,
+        whose loads are placed on the rail beam when first needed; held, its latest."""
+        latest = self.latest
+        assert latest is not None  # the loop takes the runs before it asks for loads
+        if self.keeps:
+            assert latest.loads is not None
+            return latest.loads
+        if latest.source is None:
+            if self.run.track == "discrete":
+                latest.source = StepLoads(latest.run, self.model, ballast, latest.state)
+            else:
+                previous = latest.before
+                assert previous is None or isinstance(previous, PlacedLoads)
+                latest.source = PlacedLoads(latest.run, self.model, ballast, previous)
+            latest.before = None
+        latest.loads = latest.source.at(state)
+        return latest.loads
 
 
-def vehicle_runs(runs, lins: list[LinearisedTrack], timing: dict, ballast=None,
-                 state=None):  # fmt: skip
-    """Run every vehicle of the traffic once over the track as it stands; a vehicle
-    ``held`` keeps its latest run. A generator (``yield from`` it): it yields the runs to
-    make and is sent their results (`step_together`).
-
-    The vehicles run side by side in one batch (`trackdyn.simulation.run_batch`), with
-    those of the other sections stepped together, each over its own linearisation of the
-    track, or on the discrete track of the ballast's rail-seat stiffness and ``state``'s
-    gaps; only the solver's arrays come back, no Datasets. Adds this section's share of
-    the batch's seconds to ``timing["vehicle"]`` and the rest of the time it waited (the
-    other sections' runs and steps) to ``timing["others"]``.
-
-    Parameters
-    ----------
-    runs : list of TrafficRun
-        The traffic.
-    lins : list of LinearisedTrack
-        The current track linearised about each run's static wheel load.
-    timing : dict
-        Seconds spent so far, by part.
-    ballast : Ballast, optional
-        The ballast model of the section (needed for runs on the discrete track).
-    state : BallastState, optional
-        Its current state (each run records it, for `StepLoads`).
-
-    Yields
-    ------
-    tuple of list
-        Vehicles, tracks and run options of the runs to make; sent back: their results
-        (a `trackdyn.simulation.Run` or an exception each) and the seconds they took.
-
-    Returns
-    -------
-    list of trackdyn.simulation.Run
-        One solved run per vehicle.
-    """
-    fresh = [(run, lin) for run, lin in zip(runs, lins, strict=True) if not run.keeps]
-    if fresh:
-        vehicles = [run.traffic.vehicle for run, _ in fresh]
-        tracks = [
-            discrete_track(lin, run.discrete, stiffness=ballast.stiffness, gap=state.gap)
-            if run.run.track == "discrete"
-            else lin
-            for run, lin in fresh
-        ]
-        for run, _ in fresh:
-            run.state = state
-        clock = time.perf_counter()
-        solved, seconds = yield vehicles, tracks, [run.run for run, _ in fresh]
-        timing["vehicle"] += seconds
-        timing["others"] += time.perf_counter() - clock - seconds
-        for (run, _), result in zip(fresh, solved, strict=True):
-            if isinstance(result, Exception):
-                raise result
-            run.solved = result
-    return [run.solved for run in runs]
-
-
-def step_together(loops: list) -> list:
-    """Drive the deterioration loops of several sections in step (`predicting`): at each
-    round, the vehicle runs every loop asks for (`vehicle_runs`) go in one batch
-    (`trackdyn.simulation.run_batch`, which groups them by model; storing only the wheel
-    loads, `KEPT`), so that the runs of different sections share the solver's vector
-    lanes. A run's result does not depend on the others in its batch, so each loop gives
-    what it gives alone.
-
-    Parameters
-    ----------
-    loops : list of generator
-        The loops, not started.
-
-    Returns
-    -------
-    list
-        Per loop, what it returns, or the exception that stopped it (the others go on).
-    """
-    results: list = [None] * len(loops)
-    asked: dict[int, tuple] = {}
-
-    def resume(i, sent):
-        try:
-            asked[i] = loops[i].send(sent)
-        except StopIteration as done:
-            results[i] = done.value
-        except Exception as exc:  # noqa: BLE001 - this section's failure, the others go on
-            results[i] = exc
-
-    for i in range(len(loops)):
-        resume(i, None)
-    while asked:
-        rounds, asked = asked, {}
-        pairs = [(i, j) for i, r in rounds.items() for j in range(len(r[0]))]
-        clock = time.perf_counter()
-        solved = run_batch(*([rounds[i][part][j] for i, j in pairs] for part in range(3)),
-                           keep=KEPT)  # fmt: skip
-        share = (time.perf_counter() - clock) / len(pairs)  # split evenly between the runs
-        answers: dict[int, list] = {i: [] for i in rounds}
-        for (i, _), result in zip(pairs, solved, strict=True):
-            answers[i].append(result)
-        for i in rounds:
-            resume(i, (answers[i], share * len(answers[i])))
-    return results
-
-
-def rail_seat_loads(runs, solved, ballast, state, timing: dict) -> list:
+def rail_seat_loads(runs, ballast, state, timing) -> list:
     """Load cycles of one passage of each vehicle, (wheels, sleepers) [N] per run.
 
-    The wheel loads of each run go onto the rail beam on ``state`` (`passage_loads`; they are
-    placed on the beam windows once per run, `wheel_forces`, and solved on each state); a run
+    The wheel loads of each run go onto the rail beam on ``state`` (`PlacedLoads`); a run
     on the discrete track gives them itself, redistributed by the rail beam as the ballast
     has settled since the run (`StepLoads`); a run ``held`` keeps its latest load cycles.
-    Adds the seconds spent to ``timing["beam"]``.
+    Adds the seconds spent to ``timing.beam``.
 
     Parameters
     ----------
     runs : list of TrafficRun
-        The traffic.
-    solved : list of trackdyn.simulation.Run
-        Their solved runs (`vehicle_runs`).
+        The traffic, each with its latest run.
     ballast : Ballast
         The ballast model of the section.
     state : BallastState
         Its current state (gaps, rest deflection).
-    timing : dict
+    timing : Timing
         Seconds spent so far, by part.
     """
     clock = time.perf_counter()
-    for run, done in zip(runs, solved, strict=True):
-        if run.keeps:
-            continue  # its latest load cycles stand
-        if run.run.track != "discrete":
-            if run.placed is None or run.placed[0] is not done:
-                previous = None if run.placed is None else run.placed[1]
-                run.placed = (done, wheel_forces(done, ballast, run.model, previous))
-            run.loads = passage_loads(run.placed[1], ballast, state)
-            continue
-        if run.step is None or run.step.run is not done:
-            run.step = StepLoads(done, run.model, ballast, run.state)
-        run.loads = run.step.at(state)
-    timing["beam"] += time.perf_counter() - clock
-    return [run.loads for run in runs]
+    loads = [run.loads_at(ballast, state) for run in runs]
+    timing.beam += time.perf_counter() - clock
+    return loads

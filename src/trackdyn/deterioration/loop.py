@@ -15,7 +15,7 @@ step start; see `trackdyn.deterioration.accumulation` for how each law sums them
 cycle adds settlement; each vehicle's part is recorded). Zones
 (`trackdyn.deterioration.zones`) give parts of the track their own law and rate field.
 
-Two step sizes. A step (a vehicle run) is as long as ``max_step_settlement`` allows: with
+Two step sizes. A step (a vehicle run) is as long as ``max_step_settlement_mm`` allows: with
 the loads of the step start, the increment is known in closed form for any ``ΔM``, so the
 step is the largest one whose change of the track's shape stays within the limit at
 every sleeper (found by root finding). The shape is what the vehicle feels: the
@@ -63,152 +63,32 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from dataclasses import dataclass
 
 import numpy as np
-from pydantic import ConfigDict
 from scipy.ndimage import uniform_filter1d
 from scipy.optimize import brentq
 
 from trackdyn.deterioration.accumulation import Zoned
 from trackdyn.deterioration.ballast import Ballast, rate_field
-from trackdyn.deterioration.loads import (
-    TrafficRun,
-    rail_seat_loads,
-    step_together,
-    vehicle_runs,
-)
-from trackdyn.deterioration.maintenance import Maintenance, MaintenanceOptions
-from trackdyn.deterioration.results import d1_sd, make_dataset
+from trackdyn.deterioration.driver import RunReply, RunRequest, step_together
+from trackdyn.deterioration.loads import TrafficRun, rail_seat_loads
+from trackdyn.deterioration.maintenance import Maintenance
+from trackdyn.deterioration.options import LoopOptions
+from trackdyn.deterioration.quality import d1_sd
+from trackdyn.deterioration.record import LoopRecord, StepRecord, Timing, TrackState
+from trackdyn.deterioration.results import make_dataset
 from trackdyn.deterioration.starts import STARTS, surveyed_geometry, tamped_geometry
 from trackdyn.deterioration.zones import check_zones
-from trackdyn.errors import TrackdynInputError, require_positive, shown
-from trackdyn.options import RunOptions, Strict
-from trackdyn.progress import progress_bar
+from trackdyn.errors import (
+    Failure,
+    Status,
+    TrackdynInputError,
+    TrackdynNumericalError,
+    require_positive,
+    shown,
+)
 from trackdyn.track.rails import rail_section
 from trackdyn.track.track import RAILS, Track
-from trackdyn.vehicle.models import build_model
-from trackdyn.vehicle.parameters import Vehicle
-
-
-@dataclass(frozen=True)
-class Traffic:
-    """One kind of vehicle in the traffic mix.
-
-    Parameters
-    ----------
-    vehicle : Vehicle
-        Vehicle parameter set.
-    speed : float
-        Running speed [m/s].
-    passages_per_mgt : float
-        Passages of this vehicle per million gross tonnes of traffic [-].
-    label : str
-        Name used in outputs.
-    """
-
-    vehicle: Vehicle
-    speed: float
-    passages_per_mgt: float
-    label: str = ""
-
-    def gross_mass(self, model: str) -> float:
-        """Gross mass of the vehicle as the vehicle model ``model`` carries it [kg]."""
-        return build_model(model, self.vehicle).gross_mass
-
-
-class LoopOptions(Strict):
-    """Options of the deterioration loop; each default lives here (the ``[loop]`` table of
-    a scenario file takes its defaults from these).
-
-    Parameters
-    ----------
-    total_mgt : float
-        Traffic to predict over [MGT].
-    max_step_settlement : float
-        Largest change of the settlement's shape (less its moving mean over
-        `SHAPE_WAVELENGTH`) of any sleeper in one step [m]; a sleeper's stable step
-        (`stable_settlement`) may keep the load updates within it shorter. Default 1 mm:
-        on the built-in example through 50 MGT the D1 SD of every segment is within
-        0.25 % of that with 0.25 mm steps (15 steps against 55), its 300 MGT life has the
-        tampings of 0.5 mm steps (91 steps against 153) to 0.5 MGT through 240 MGT and to
-        6 MGT after (270.2 against 275.8 MGT, after which the bridge segment's last
-        tamping, at 291 MGT, falls within the horizon only with 1 mm steps), and the
-        Varandas law takes 29-42 steps (its D1 SD moving by up to 2 % between limits of
-        0.5, 1 and 2 mm, without a trend, and by as much with round-off).
-    snapshot_every_mgt : float
-        Tonnage between stored geometry snapshots [MGT].
-    threshold_sd_mm : float
-        D1 standard deviation that triggers maintenance [mm]; default 1.6 mm, illustrative
-        (set within what the tamped example reaches in 50 MGT; a railway sets its own).
-    segment_length : float
-        Segment length of the D1 standard deviation [m].
-    max_steps : int
-        Steps allowed before giving up.
-    rate_cov : float
-        Coefficient of variation of the lognormal settlement-rate factor per sleeper [-];
-        default 0.3, illustrative (an engineering estimate, not a published value).
-    rate_correlation_length : float
-        Correlation length of that factor along the track [m]; default 3 m, illustrative
-        (an engineering estimate: a few sleepers).
-    seed : int or tuple of int
-        Seed of the rate field.
-    rate_factor : tuple of tuple of float, optional
-        A rate field given per rail and sleeper (2, n) [-], e.g. estimated by `trackdyn
-        calibrate`; ``rate_cov`` and ``seed`` are then not used.
-    rate_scale : tuple of float, optional
-        Multiplier of the settlement rate per sleeper (both rails) [-] on top of the rate
-        field and the zones' own, e.g. under-sleeper pads over a range (the interventions
-        study's ``settlement_scale``); default none (1).
-    sleeper_mass : float
-        Sleeper mass per rail seat, hanging from the rail when its ballast sinks [kg];
-        default 125.5 kg, the half-sleeper mass of Zhai et al. (2004).
-    run : RunOptions
-        Model (with wheels on both rails), linearisation increment, time step and solver
-        of the vehicle runs; each vehicle's speed comes from its `Traffic`.
-    rail : str
-        Rail section, for the bending stiffness EI of the load distribution.
-    output_spacing : float
-        Travel between stored simulation samples [m] (sets ``store_every``).
-    start : str
-        ``"as measured"``: the track as its files give it; ``"tamped"``: freshly tamped
-        (`trackdyn.deterioration.starts`: most of the D1 band removed, sleepers seated);
-        ``"as surveyed"``: as measured without the wavelengths under 3 m, mostly
-        measurement noise (`trackdyn.deterioration.starts.surveyed_geometry`).
-    snapshot_mgt : tuple of float
-        Further tonnages at which to store a geometry snapshot, e.g. those of surveys
-        [MGT], each the end of a step; those beyond ``total_mgt`` are ignored.
-    min_step_passages : float
-        Shortest first step, in passages of the traffic mix [-]: one train; default 100
-        (illustrative: a coal train of 100 wagons; the Richards Bay line runs 200). The
-        first step after a tamping too.
-    maintenance : MaintenanceOptions, optional
-        Tamp over the horizon (`trackdyn.deterioration.maintenance`); None: no maintenance,
-        the loop only reports when each segment reaches the threshold.
-    """
-
-    model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
-
-    total_mgt: float = 50.0
-    max_step_settlement: float = 1e-3
-    snapshot_every_mgt: float = 10.0
-    threshold_sd_mm: float = 1.6
-    segment_length: float = 200.0
-    max_steps: int = 1000
-    rate_cov: float = 0.3
-    rate_correlation_length: float = 3.0
-    seed: int | tuple[int, ...] = 0
-    rate_factor: tuple[tuple[float, ...], ...] | None = None
-    rate_scale: tuple[float, ...] | None = None
-    sleeper_mass: float = 125.5
-    run: RunOptions = RunOptions()
-    rail: str = "60E1"
-    output_spacing: float = 0.02
-    start: str = "as measured"
-    snapshot_mgt: tuple[float, ...] = ()
-    min_step_passages: float = 100.0
-    maintenance: MaintenanceOptions | None = None
-
 
 STABLE_GAIN = 1.0
 """Largest ``g = s kd e / Q`` a step may reach at any sleeper (no overshoot)."""
@@ -299,24 +179,6 @@ def step_size(increment, cap: float, limit) -> float:
 def predict(track: Track, traffic, law, options=None, *, zones=(), progress=False):
     """Predict settlement and geometry of a track section over accumulated tonnage.
 
-    Parameters as `predicting`, which this runs on its own (`step_together`).
-
-    Returns
-    -------
-    xarray.Dataset
-        See `trackdyn.deterioration.results.make_dataset`.
-    """
-    (result,) = step_together([predicting(track, traffic, law, options, zones=zones,
-                                          progress=progress)])  # fmt: skip
-    if isinstance(result, Exception):
-        raise result
-    return result
-
-
-def predicting(track: Track, traffic, law, options=None, *, zones=(), progress=False):
-    """`predict` as a generator, to be stepped together with other sections'
-    (`step_together`): it yields each step's vehicle runs (`vehicle_runs`).
-
     Parameters
     ----------
     track : Track
@@ -338,182 +200,285 @@ def predicting(track: Track, traffic, law, options=None, *, zones=(), progress=F
     xarray.Dataset
         See `trackdyn.deterioration.results.make_dataset`.
     """
-    t0 = time.perf_counter()
-    o = options or LoopOptions()
-    total = float(require_positive("total_mgt", o.total_mgt))
-    limit = float(require_positive("max_step_settlement", o.max_step_settlement))
-    every = float(require_positive("snapshot_every_mgt", o.snapshot_every_mgt))
-    require_positive("min_step_passages", o.min_step_passages)
+    section = SectionLoop(track, traffic, law, options, zones=zones)
+    (result,) = step_together([section], progress=progress)
+    if isinstance(result, Failure):
+        raise result.error()
+    return make_dataset(result)
+
+
+class SectionLoop:
+    """The deterioration loop of one section, phase by phase.
+
+    Made, it has started (checks, start state, rate field, ballast, maintenance); then,
+    step after step until `done`: `runs_wanted` gives the vehicle runs the step needs (a
+    `RunRequest`, empty when every vehicle holds its latest run), `take_runs` takes their
+    `RunReply`, `settle_step` settles the ballast over the step (the rail-seat loads from
+    the runs, `loads_from_runs`, updated at each sleeper's stable step; a `snapshot` of
+    each tonnage asked for), and `maintain` tamps what is due at its end; `record` gives
+    the `LoopRecord`. `trackdyn.deterioration.driver.step_together` drives one section
+    (`predict`) or several side by side, their runs in one batch.
+
+    Parameters
+    ----------
+    track, traffic, law, options, zones
+        As `predict`.
+    """
+
+    def __init__(self, track: Track, traffic, law, options=None, *, zones=()):
+        t0 = time.perf_counter()
+        o = self.o = options or LoopOptions()
+        self.total = float(require_positive("total_mgt", o.total_mgt))
+        require_positive("max_step_settlement_mm", o.max_step_settlement_mm)
+        self.limit = o.max_step_settlement
+        every = float(require_positive("snapshot_every_mgt", o.snapshot_every_mgt))
+        require_positive("min_step_passages", o.min_step_passages)
+        track, seg_start, seg_end = _start_state(track, o)
+        self.track = track
+        pos = self.position = track.supports.position
+        self.shape = (len(RAILS), pos.size)
+        check_zones(zones, (float(pos[0]), float(pos[-1])))
+        self.mean_over = shape_sleepers(pos)
+        self.rate = _rate(o, zones, pos)
+        self.traffic, self.law, self.kind = tuple(traffic), law, _kinds(zones, pos)
+        laws = _zone_laws(law, zones, pos)
+        self.sensitivity = sum(m * lw.load_sensitivity for m, lw in laws)
+        self.runs, self.lins = _runs(track, traffic, o)
+        per_mgt = self.per_mgt = sum(t.passages_per_mgt for t in traffic)
+        self.shortest = o.min_step_passages / per_mgt if per_mgt > 0 else 0.0
+        base = (
+            self.lins[max(self.lins)]
+            if self.lins
+            else track.linearise(NO_TRAFFIC_LOAD, o.run.delta, extrapolate=o.run.extrapolate)
+        )
+        self.timing = Timing()
+        clock = time.perf_counter()
+        self.ballast = Ballast(base, rail_section(o.rail), o.sleeper_mass,
+                               seated=o.start == "tamped")  # fmt: skip
+        self.state = self.ballast.initial
+        self.timing.beam += time.perf_counter() - clock
+        self.acc = Zoned(laws, self.shape, len(traffic))
+        self.maint = (
+            None
+            if o.maintenance is None or per_mgt == 0
+            else Maintenance(o.maintenance, pos, seg_start, seg_end, o.threshold_sd_mm)
+        )
+        self.wear = self.maint.factor if self.maint is not None else (lambda dm: 1.0)
+        self.reference, self.fresh = track.geometry, 0.0  # tonnage of the last (re)start [MGT]
+        self.by_vehicle = np.zeros((len(traffic), *self.shape))
+        extra = [float(m) for m in o.snapshot_mgt if 0.0 < m < self.total]
+        self.snap_at = np.unique(np.concatenate([np.arange(0.0, self.total, every), extra,
+                                                 [self.total]]))  # fmt: skip
+        self.ends = np.unique(np.concatenate([extra, [self.total]]))  # a step must end [MGT]
+        self.level, self.mgt, self.geometry = np.zeros(self.shape), 0.0, track.geometry
+        self.states = [TrackState(0.0, self.level, self.geometry, self.state.hanging_gap)]
+        self.steps: list[StepRecord] = []
+        self.step_lins: list = []  # the step's linearisations, one per run
+        self.fresh_runs: list[TrafficRun] = []  # the runs of the step's request
+        self.timing.total += time.perf_counter() - t0
+
+    @property
+    def done(self) -> bool:
+        """The loop has reached ``total_mgt``."""
+        return self.mgt >= self.total
+
+    def runs_wanted(self) -> RunRequest:
+        """The vehicle runs of the next step over the track as it stands: each vehicle not
+        held, over the current track linearised about its static wheel load (or the
+        discrete track on the current ballast). Refuses to go on after ``max_steps``
+        steps, or when settlement runs away (`RUNAWAY_STEPS`)."""
+        self._check_progress()
+        clock = time.perf_counter()
+        current = {p: self.ballast.linearised(lin, self.state, self.geometry)
+                   for p, lin in self.lins.items()}  # fmt: skip
+        self.timing.beam += time.perf_counter() - clock
+        self.step_lins = [current[run.lin.static_load] for run in self.runs]
+        fresh = [(run, lin) for run, lin in zip(self.runs, self.step_lins, strict=True)
+                 if not run.keeps]  # fmt: skip
+        self.fresh_runs = [run for run, _ in fresh]
+        return RunRequest(
+            tuple(run.traffic.vehicle for run, _ in fresh),
+            tuple(run.track(lin, self.ballast, self.state) for run, lin in fresh),
+            tuple(run.run for run, _ in fresh),
+        )
+
+    def _check_progress(self) -> None:
+        """Refuse a step beyond ``max_steps``, or after `RUNAWAY_STEPS` runaway steps."""
+        o, mgt = self.o, self.mgt
+        if len(self.steps) >= o.max_steps:
+            raise TrackdynInputError(
+                f"more than max_steps = {o.max_steps} steps needed to reach {self.total:g} MGT "
+                f"(at {mgt:.3g} MGT); raise max_step_settlement_mm or max_steps, or check "
+                "the settlement law's parameters"
+            )
+        lengths = np.diff(np.array([s.start for s in self.steps[-RUNAWAY_STEPS:]] + [mgt]))
+        if (
+            self.per_mgt > 0
+            and lengths.size == RUNAWAY_STEPS
+            and np.all(lengths * self.per_mgt < 1)
+        ):
+            raise TrackdynNumericalError(
+                f"settlement runs away at {mgt:.3g} MGT: {RUNAWAY_STEPS} steps in a row "
+                f"shorter than one passage each changed the shape by max_step_settlement_mm; "
+                "check the settlement law's parameters",
+                Status.SETTLEMENT_RAN_AWAY,
+            )
+
+    def take_runs(self, reply: RunReply) -> None:
+        """Take the runs of `runs_wanted`'s request (a `Failure` among them is raised)."""
+        self.timing.vehicle += reply.seconds
+        self.timing.total += reply.seconds
+        for run, result in zip(self.fresh_runs, reply.results, strict=True):
+            if isinstance(result, Failure):
+                raise result.error()
+            run.ran(result, self.state)
+
+    def loads_from_runs(self) -> tuple[list, np.ndarray]:
+        """The load cycles of the runs on the current ballast, for `Zoned.prepare`, and the
+        largest rail-seat load per rail and sleeper [N]."""
+        loads = rail_seat_loads(self.runs, self.ballast, self.state, self.timing)
+        return _cycles(self.runs, self.step_lins, loads, self.shape)
+
+    def settle_step(self) -> None:
+        """Settle the ballast over one step: as long as the step limit allows (at least a
+        train after a (re)start; to the next end, tamping or survey), the rail-seat loads
+        updated at each sleeper's stable step; record the step and the track at its end."""
+        o, mgt, maint = self.o, self.mgt, self.maint
+        target = self.ends[np.searchsorted(self.ends, mgt, side="right")]
+        if maint is not None:
+            target = min(target, maint.next_due(mgt))
+        start_level, span, moved, updates = self.level, None, 0.0, 0
+        step_parts = np.zeros_like(self.by_vehicle)
+        while span is None or span - moved > 1e-12 * span:
+            if updates >= MAX_LOAD_UPDATES:
+                raise TrackdynNumericalError(
+                    f"more than {MAX_LOAD_UPDATES} load updates needed in one step at "
+                    f"{mgt:.3g} MGT: the settlement law follows the load too steeply for a "
+                    "stable step; check its load exponent",
+                    Status.SETTLEMENT_RAN_AWAY,
+                )
+            cycles, peak = self.loads_from_runs()
+            settle = _scaled(self.rate, self.acc.prepare(cycles), self.wear)
+            if span is None:  # the accuracy limit, and at least one train
+                span = step_size(lambda dm, f=settle: shape_change(f(dm), self.mean_over),
+                                 target - mgt, self.limit)  # fmt: skip
+                train = min(self.shortest, target - mgt)
+                if mgt == self.fresh:
+                    span = max(span, train)
+                if maint is not None:
+                    span = maint.until_due(mgt, settle, self.geometry, self.track.extent,
+                                           o.segment_length, span)  # fmt: skip
+                step_peak = peak
+            stable = stable_settlement(peak, self.ballast.stiffness, self.sensitivity)
+            dm = step_size(settle, span - moved, stable)
+            here = mgt + moved
+            for m in self.snap_at[(self.snap_at > here) & (self.snap_at <= here + dm)]:
+                clock = time.perf_counter()  # the snapshots within the step
+                inner = self.level + settle(m - here)
+                at = self.ballast.state(inner, self.state)
+                self.snapshot(m, inner, at, self.ballast.geometry(self.reference, at))
+                self.timing.beam += time.perf_counter() - clock
+            self.level = self.level + settle(dm)
+            step_parts += self.rate * self.wear(dm) * self.acc.advance(dm)
+            if maint is not None:
+                maint.advance(dm)
+            moved, updates = moved + dm, updates + 1
+            clock = time.perf_counter()
+            self.state = self.ballast.state(self.level, self.state)
+            self.timing.beam += time.perf_counter() - clock
+        self._end_step(target, span, step_parts, step_peak, start_level, updates)
+
+    def _end_step(self, target, span, step_parts, peak, start_level, updates) -> None:
+        """Record the step that `settle_step` made, and the track at its end."""
+        self.by_vehicle += step_parts
+        for run in self.runs:
+            run.held = _largest_share(step_parts, run.vehicle) < MIN_SHARE
+        clock = time.perf_counter()
+        self.geometry = self.ballast.geometry(self.reference, self.state)
+        self.timing.beam += time.perf_counter() - clock
+        start, total = self.mgt, self.total
+        self.mgt = target if target - (start + span) <= 1e-12 * total else start + span
+        self.steps.append(StepRecord(start, self.mgt, peak,
+                                     float((self.level - start_level).max()), updates,
+                                     len(self.fresh_runs)))  # fmt: skip
+        if self.mgt - self.states[-1].mgt > 1e-12 * total:  # not a snapshot just recorded
+            self.snapshot(self.mgt, self.level, self.state, self.geometry)
+
+    def snapshot(self, mgt: float, level, state, geometry) -> None:
+        """Store the track at ``mgt`` [MGT]: settlement ``level`` [m], the ballast
+        ``state`` and the ``geometry``."""
+        self.states.append(TrackState(mgt, level, geometry, state.hanging_gap))
+
+    def maintain(self) -> None:
+        """Tamp the segments due at the step's end (`trackdyn.deterioration.maintenance`):
+        the geometry and the ballast lifted, the hardening restarted, every vehicle run
+        again on the new shape."""
+        maint, o, mgt = self.maint, self.o, self.mgt
+        if maint is None or mgt >= self.total:
+            return
+        extent = self.track.extent
+        due = maint.due(mgt, maint.d1_sd(self.geometry, extent, o.segment_length))
+        if not due.size:
+            return
+        clock = time.perf_counter()
+        geometry = self.geometry
+        tamped, held = maint.tamp(mgt, due, geometry, extent, o.segment_length)
+        change = [np.interp(self.position, geometry.distance, tamped.profile(r) -
+                            geometry.profile(r)) for r in RAILS]  # fmt: skip
+        self.ballast.tamp(self.level, self.state, held, np.array(change))
+        self.geometry = tamped
+        self.acc.restart(held, maint.o.consolidated_mgt)
+        for run in self.runs:  # a new shape: every vehicle runs again
+            run.held = False
+        self.state = self.ballast.state(self.level, self.state)
+        self.reference = self.ballast.geometry(self.geometry, self.state, sign=-1.0)
+        self.fresh = mgt
+        self.timing.beam += time.perf_counter() - clock
+
+    def record(self) -> LoopRecord:
+        """What the loop recorded, for `trackdyn.deterioration.results.make_dataset`."""
+        return LoopRecord(self.track, self.traffic, self.law, self.o, self.states, self.steps,
+                          self.snap_at, self.acc.N, self.rate, self.by_vehicle, self.kind,
+                          self.maint.done if self.maint else [], self.timing)  # fmt: skip
+
+
+def _start_state(track: Track, o: LoopOptions):
+    """The section in the start state of ``o.start`` (`trackdyn.deterioration.starts`),
+    checked to hold a whole segment, and the segments' starts and ends [m]."""
     length = track.extent[1] - track.extent[0]
     if o.segment_length > length:
         raise TrackdynInputError(
             f"segment_length_m = {o.segment_length:g} m is longer than the track "
             f"({length:g} m); the D1 SD needs at least one whole segment"
         )
-    _, seg_start, seg_end = d1_sd(track.geometry, track.extent, o.segment_length)
+    _, starts, ends = d1_sd(track.geometry, track.extent, o.segment_length)
     if o.start not in STARTS:
         raise TrackdynInputError(f"start must be one of {', '.join(STARTS)}; got {o.start!r}")
-    seated = o.start == "tamped"
-    if seated:
+    if o.start == "tamped":
         tamped = tamped_geometry(track.geometry, track.extent, o.segment_length)
         track = dataclasses.replace(track, geometry=tamped)
     elif o.start == "as surveyed":
         track = dataclasses.replace(track, geometry=surveyed_geometry(track.geometry))
-    pos = track.supports.position
-    shape = (len(RAILS), pos.size)
-    check_zones(zones, (float(pos[0]), float(pos[-1])))
-    spacing = float(np.median(np.diff(pos)))
-    mean_over = shape_sleepers(pos)
-    rate = rate_field(pos.size, spacing, o.rate_cov, o.rate_correlation_length, o.seed,
+    return track, starts, ends
+
+
+def _rate(o: LoopOptions, zones, position) -> np.ndarray:
+    """The settlement-rate factor per rail and sleeper [-]: the section's field, the
+    zones' own, times ``rate_scale``."""
+    spacing = float(np.median(np.diff(position)))
+    rate = rate_field(position.size, spacing, o.rate_cov, o.rate_correlation_length, o.seed,
                       o.rate_factor)  # fmt: skip
     for z in zones:
         if z.rate is not None:
-            own = rate_field(pos.size, spacing, z.rate.cov, z.rate.correlation_length,
+            own = rate_field(position.size, spacing, z.rate.cov, z.rate.correlation_length,
                              z.rate.seed)  # fmt: skip
-            rate = np.where(z.holds(pos), own, rate)
+            rate = np.where(z.holds(position), own, rate)
     if o.rate_scale is not None:
-        if len(o.rate_scale) != pos.size:
+        if len(o.rate_scale) != position.size:
             raise TrackdynInputError(f"rate_scale has {len(o.rate_scale)} values for "
-                                     f"{pos.size} sleepers")  # fmt: skip
+                                     f"{position.size} sleepers")  # fmt: skip
         rate = rate * np.asarray(o.rate_scale)
-    laws = _zone_laws(law, zones, pos)
-    sensitivity = sum(m * lw.load_sensitivity for m, lw in laws)
-    runs, lins = _runs(track, traffic, o)
-    per_mgt = sum(t.passages_per_mgt for t in traffic)
-    shortest = o.min_step_passages / per_mgt if per_mgt > 0 else 0.0
-    base = (
-        lins[max(lins)]
-        if lins
-        else track.linearise(NO_TRAFFIC_LOAD, o.run.delta, extrapolate=o.run.extrapolate)
-    )
-    timing = {"vehicle": 0.0, "beam": 0.0, "others": 0.0}  # others: other sections' time
-    clock = time.perf_counter()
-    ballast = Ballast(base, rail_section(o.rail), o.sleeper_mass, seated=seated)
-    state = ballast.initial
-    timing["beam"] += time.perf_counter() - clock
-    acc = Zoned(laws, shape, len(traffic))
-    maint = (
-        None
-        if o.maintenance is None or per_mgt == 0
-        else Maintenance(o.maintenance, pos, seg_start, seg_end, o.threshold_sd_mm)
-    )
-    wear = maint.factor if maint is not None else (lambda dm: 1.0)
-    reference, fresh = track.geometry, 0.0  # tonnage of the last (re)start [MGT]
-    by_vehicle = np.zeros((len(traffic), *shape))
-    extra = [float(m) for m in o.snapshot_mgt if 0.0 < m < total]
-    snap_at = np.unique(np.concatenate([np.arange(0.0, total, every), extra, [total]]))
-    ends = np.unique(np.concatenate([extra, [total]]))  # where a step must end [MGT]
-    level, mgt, geometry = np.zeros(shape), 0.0, track.geometry
-    history: dict[str, list] = {"mgt": [0.0], "settlement": [level], "geometry": [geometry],
-               "hanging_gap": [state.hanging_gap]}  # fmt: skip
-    steps: dict[str, list[float]] = {
-        "start": [],
-        "end": [],
-        "peak_load": [],
-        "max_settlement": [],
-        "load_updates": [],
-        "vehicle_runs": [],
-    }
-    with progress_bar(progress, total, "tonnage [MGT]") as bar:
-        while mgt < total:
-            if len(steps["start"]) >= o.max_steps:
-                raise TrackdynInputError(
-                    f"more than max_steps = {o.max_steps} steps needed to reach {total:g} MGT "
-                    f"(at {mgt:.3g} MGT); raise max_step_settlement_mm or max_steps, or check "
-                    "the settlement law's parameters"
-                )
-            lengths = np.diff(np.array(steps["start"][-RUNAWAY_STEPS:] + [mgt]))
-            if per_mgt > 0 and lengths.size == RUNAWAY_STEPS and np.all(lengths * per_mgt < 1):
-                raise TrackdynInputError(
-                    f"settlement runs away at {mgt:.3g} MGT: {RUNAWAY_STEPS} steps in a row "
-                    f"shorter than one passage each changed the shape by max_step_settlement; "
-                    "check the settlement law's parameters"
-                )
-            clock = time.perf_counter()
-            current = {p: ballast.linearised(lin, state, geometry) for p, lin in lins.items()}
-            timing["beam"] += time.perf_counter() - clock
-            step_lins = [current[run.lin.static_load] for run in runs]
-            ran = sum(not run.keeps for run in runs)
-            solved = yield from vehicle_runs(runs, step_lins, timing, ballast, state)
-            target = ends[np.searchsorted(ends, mgt, side="right")]
-            if maint is not None:
-                target = min(target, maint.next_due(mgt))
-            start_level, span, moved, updates = level, None, 0.0, 0
-            step_parts = np.zeros_like(by_vehicle)
-            while span is None or span - moved > 1e-12 * span:
-                if updates >= MAX_LOAD_UPDATES:
-                    raise TrackdynInputError(
-                        f"more than {MAX_LOAD_UPDATES} load updates needed in one step at "
-                        f"{mgt:.3g} MGT: the settlement law follows the load too steeply for a "
-                        "stable step; check its load exponent"
-                    )
-                loads = rail_seat_loads(runs, solved, ballast, state, timing)
-                cycles, peak = _cycles(runs, step_lins, loads, shape)
-                settle = _scaled(rate, acc.prepare(cycles), wear)
-                if span is None:  # the accuracy limit, and at least one train
-                    span = step_size(lambda dm, f=settle: shape_change(f(dm), mean_over),
-                                     target - mgt, limit)  # fmt: skip
-                    train = min(shortest, target - mgt)
-                    if mgt == fresh:
-                        span = max(span, train)
-                    if maint is not None:
-                        span = maint.until_due(mgt, settle, geometry, track.extent,
-                                               o.segment_length, span)  # fmt: skip
-                    step_peak = peak
-                stable = stable_settlement(peak, ballast.stiffness, sensitivity)
-                dm = step_size(settle, span - moved, stable)
-                here = mgt + moved
-                for m in snap_at[(snap_at > here) & (snap_at <= here + dm)]:  # snapshots within
-                    clock = time.perf_counter()
-                    inner = level + settle(m - here)
-                    at = ballast.state(inner, state)
-                    _record(history, m, inner, at, ballast.geometry(reference, at))
-                    timing["beam"] += time.perf_counter() - clock
-                level = level + settle(dm)
-                step_parts += rate * wear(dm) * acc.advance(dm)
-                if maint is not None:
-                    maint.advance(dm)
-                moved, updates = moved + dm, updates + 1
-                clock = time.perf_counter()
-                state = ballast.state(level, state)
-                timing["beam"] += time.perf_counter() - clock
-            by_vehicle += step_parts
-            for run in runs:
-                run.held = _largest_share(step_parts, run.vehicle) < MIN_SHARE
-            clock = time.perf_counter()
-            geometry = ballast.geometry(reference, state)
-            timing["beam"] += time.perf_counter() - clock
-            steps["start"].append(mgt)
-            mgt = target if target - (mgt + span) <= 1e-12 * total else mgt + span
-            steps["end"].append(mgt)
-            steps["peak_load"].append(step_peak)
-            steps["max_settlement"].append(float((level - start_level).max()))
-            steps["load_updates"].append(updates)
-            steps["vehicle_runs"].append(ran)
-            if mgt - history["mgt"][-1] > 1e-12 * total:  # not a snapshot just recorded
-                _record(history, mgt, level, state, geometry)
-            if maint is not None and mgt < total:
-                due = maint.due(mgt, maint.d1_sd(geometry, track.extent, o.segment_length))
-                if due.size:
-                    clock = time.perf_counter()
-                    tamped, held = maint.tamp(mgt, due, geometry, track.extent,
-                                              o.segment_length)  # fmt: skip
-                    change = [np.interp(pos, geometry.distance, tamped.profile(r) -
-                                        geometry.profile(r)) for r in RAILS]  # fmt: skip
-                    ballast.tamp(level, state, held, np.array(change))
-                    geometry = tamped
-                    acc.restart(held, maint.o.consolidated_mgt)
-                    for run in runs:  # a new shape: every vehicle runs again
-                        run.held = False
-                    state = ballast.state(level, state)
-                    reference = ballast.geometry(geometry, state, sign=-1.0)
-                    fresh = mgt
-                    timing["beam"] += time.perf_counter() - clock
-            bar.update(mgt)
-    timing["total"] = time.perf_counter() - t0 - timing["others"]
-    record = {"cycles": acc.N, "rate": rate, "by_vehicle": by_vehicle,
-              "kind": _kinds(zones, pos), "interventions": maint.done if maint else []}  # fmt: skip
-    return make_dataset(track, history, steps, snap_at, record, timing, traffic, law, o)
+    return rate
 
 
 def _largest_share(parts, vehicle: int) -> float:
@@ -522,13 +487,6 @@ def _largest_share(parts, vehicle: int) -> float:
     rail, sleeper) [m]; 1 when nothing settled)."""
     largest = float(parts.sum(axis=0).max())
     return float(parts[vehicle].max()) / largest if largest > 0 else 1.0
-
-
-def _record(history, mgt, level, state, geometry) -> None:
-    """Append the track at ``mgt`` [MGT] to the loop's ``history``."""
-    for key, value in (("mgt", mgt), ("settlement", level), ("geometry", geometry),
-                       ("hanging_gap", state.hanging_gap)):  # fmt: skip
-        history[key].append(value)
 
 
 def _cycles(runs, lins, loads, shape):
@@ -571,7 +529,7 @@ def _runs(track: Track, traffic, o: LoopOptions):
             raise TrackdynInputError(
                 f"passages_per_mgt must be >= 0, got {shown(t.passages_per_mgt)}"
             )
-        require_positive("speed", t.speed)
+        require_positive("speed_kmh", t.speed_kmh)
         if t.passages_per_mgt > 0:
             load = t.vehicle.static_wheel_load
             if load not in lins:

@@ -70,7 +70,6 @@ Characterisation of track geometry. CEN, Brussels.
 from __future__ import annotations
 
 import dataclasses
-from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 from pydantic import (
@@ -79,16 +78,15 @@ from pydantic import (
     NonNegativeInt,
     PositiveFloat,
     PositiveInt,
+    field_validator,
     model_validator,
 )
 from scipy.optimize import brentq
 
+from trackdyn.deterioration.quality import D1Assessment
 from trackdyn.options import Strict
 from trackdyn.track.quality import longitudinal_level
 from trackdyn.track.track import RAILS
-
-if TYPE_CHECKING:  # results imports this module
-    from trackdyn.deterioration.results import D1Assessment
 
 DUE_MARGIN = 0.005
 """Fraction under the threshold at which a segment counts as due at a step end [-]: the
@@ -102,8 +100,8 @@ class MaintenanceOptions(Strict):
     Parameters
     ----------
     policy : str
-        ``"threshold"``: tamp a segment when its D1 SD reaches the loop's threshold;
-        ``"fixed"``: tamp every segment every ``interval_mgt``.
+        A key of `POLICIES`: ``"threshold"``, tamp a segment when its D1 SD reaches the
+        loop's threshold; ``"fixed"``, tamp every segment every ``interval_mgt``.
     interval_mgt : float, optional
         Tonnage between tampings of the fixed policy [MGT].
     min_interval_mgt : float
@@ -146,7 +144,7 @@ class MaintenanceOptions(Strict):
         Seed of the irregularity each tamping leaves.
     """
 
-    policy: Literal["threshold", "fixed"] = "threshold"
+    policy: str = "threshold"
     interval_mgt: PositiveFloat | None = None
     min_interval_mgt: NonNegativeFloat = 5.0
     neighbours: NonNegativeInt = 0
@@ -162,6 +160,13 @@ class MaintenanceOptions(Strict):
     loosening_mgt: PositiveFloat = 3.0
     damage_per_tamping: NonNegativeFloat = 0.1
     seed: NonNegativeInt = 0
+
+    @field_validator("policy")
+    @classmethod
+    def _known_policy(cls, value):
+        if value not in POLICIES:
+            raise ValueError(f"unknown maintenance policy {value!r}; known: {', '.join(POLICIES)}")
+        return value
 
     @model_validator(mode="after")
     def _interval(self):
@@ -206,13 +211,14 @@ class Maintenance:
     position : ndarray
         Sleeper positions [m].
     starts, ends : ndarray
-        Segment bounds [m] (`trackdyn.deterioration.results.d1_sd`).
+        Segment bounds [m] (`trackdyn.deterioration.quality.d1_sd`).
     threshold : float
         D1 SD that makes a segment due [mm].
     """
 
     def __init__(self, options: MaintenanceOptions, position, starts, ends, threshold: float):
         self.o, self.position, self.threshold = options, position, threshold
+        self.policy = POLICIES[options.policy]()
         self.starts, self.ends = np.asarray(starts), np.asarray(ends)
         n = self.starts.size
         self.last = np.full(n, -np.inf)  # tonnage of the last tamping [MGT]
@@ -227,87 +233,28 @@ class Maintenance:
         self._assess: D1Assessment | None = None  # the D1 SD's set-up of the latest call
 
     def d1_sd(self, geometry, extent, segment_length: float) -> np.ndarray:
-        """D1 SD of ``geometry`` (rail, segment) [mm] (`trackdyn.deterioration.results.d1_sd`),
+        """D1 SD of ``geometry`` (rail, segment) [mm] (`trackdyn.deterioration.quality.d1_sd`),
         its filter and segments set up once for every geometry on the same distances."""
-        from trackdyn.deterioration.results import D1Assessment
-
         a = self._assess
         if a is None or (a.extent, a.segment_length) != (tuple(extent), segment_length):
             a = self._assess = D1Assessment(tuple(extent), segment_length)
         return a(geometry)[0]
 
     def next_due(self, mgt: float) -> float:
-        """Next tonnage of a fixed-policy tamping after ``mgt`` [MGT] (inf: none)."""
-        if self.o.policy != "fixed":
-            return np.inf
-        step = self.o.interval_mgt
-        assert step is not None  # required by the "fixed" policy (the model's check)
-        return (np.floor(mgt / step + 1e-9) + 1) * step
+        """Next tonnage after ``mgt`` at which the policy tamps whatever the track [MGT]
+        (inf: none), so that a step ends there (`Policy.next_due`)."""
+        return self.policy.next_due(self, mgt)
 
     def due(self, mgt: float, sd) -> np.ndarray:
-        """Segments to tamp at ``mgt`` given the D1 SD (rail, segment) [mm]."""
-        if self.o.policy == "fixed":
-            step = self.o.interval_mgt
-            assert step is not None  # required by the "fixed" policy (the model's check)
-            hit = np.isclose(mgt, np.round(mgt / step) * step)
-            return np.arange(self.starts.size) if hit and mgt > 0 else np.array([], int)
-        ready = mgt - self.last >= self.o.min_interval_mgt
-        worst = np.max(sd, axis=0)
-        over = np.flatnonzero((worst >= self.threshold * (1 - DUE_MARGIN)) & ready)
-        over = np.union1d(over, sorted(self.expected)).astype(int)
-        self.expected = set()
-        # the machine is there: the segments next to the stretch that are past the alert
-        # limit go with it, and theirs next to them
-        alert = (worst >= self.o.alert_fraction * self.threshold) & ready
-        chosen = np.isin(np.arange(worst.size), over)
-        for order in (slice(None), slice(None, None, -1)):  # grow right, then left
-            grown, run = chosen[order].copy(), False
-            for i, (c, a) in enumerate(zip(chosen[order], alert[order], strict=True)):
-                run = c or (run and a)
-                grown[i] = run
-            chosen[order] = grown
-        over = np.flatnonzero(chosen)
-        k = self.o.neighbours
-        near = {j for i in over for j in range(i - k, i + k + 1) if 0 <= j < self.starts.size}
-        return np.array(sorted(near), dtype=int)
+        """Segments to tamp at ``mgt`` given the D1 SD (rail, segment) [mm]
+        (`Policy.due`)."""
+        return self.policy.due(self, mgt, sd)
 
     def until_due(self, mgt: float, settle, geometry, extent, segment_length: float,
                   cap: float) -> float:  # fmt: skip
-        """Traffic until a segment that may be tamped reaches the threshold [MGT], at most
-        ``cap`` and at most until the next segment may be tamped again (its minimum
-        interval passes, threshold policy; the fixed one lands on its tonnages by
-        `next_due`).
-
-        The rail is taken to follow the settlement increment ``settle(dm)`` [m] at the
-        sleepers; the step ends where the D1 SD so predicted reaches the threshold, so that
-        the tamping comes at its tonnage and not up to a step late. The segment that
-        reaches it is then due at the step end (`due`), whatever the rail-seat load updates
-        within the step did to its D1 SD.
-        """
-        if self.o.policy != "threshold":
-            return cap
-        wait = self.last + self.o.min_interval_mgt - mgt  # until each segment may be tamped
-        cap = min(cap, float(wait[wait > 0].min(initial=np.inf)))
-        ready = wait <= 0
-        if not ready.any():
-            return cap
-        x, target = geometry.distance, self.threshold
-
-        def worst(dm):  # the predicted D1 SD of the segments ready, worst rail [mm]
-            e = settle(dm)
-            moved = {r: geometry.profile(r) + np.interp(x, self.position, e[k])
-                     for k, r in enumerate(RAILS)}  # fmt: skip
-            sd = self.d1_sd(dataclasses.replace(geometry, **moved), extent, segment_length)
-            return np.where(ready, sd.max(axis=0), -np.inf)
-
-        def excess(dm):
-            return float(worst(dm).max()) - target
-
-        if excess(cap) <= 0 or excess(0.0) >= 0:
-            return cap
-        dm = brentq(excess, 0.0, cap, xtol=1e-9 * cap, rtol=1e-6)
-        self.expected = {int(np.argmax(worst(dm)))}
-        return dm
+        """Traffic until the policy may next tamp [MGT], at most ``cap``
+        (`Policy.until_due`)."""
+        return self.policy.until_due(self, mgt, settle, geometry, extent, segment_length, cap)
 
     def factor(self, dm: float) -> np.ndarray:
         """Settlement-rate factor of ballast damage and loosening over a step of ``dm``
@@ -407,6 +354,116 @@ class Maintenance:
                    for run in runs]  # fmt: skip
         total = np.maximum(sum(weights, np.zeros(np.shape(x))), 1.0)
         return [w / total for w in weights]
+
+
+class Policy:
+    """When a maintenance policy tamps: the base, which tamps nothing; a policy is a
+    subclass registered in `POLICIES` (its name the ``[maintenance] policy`` key).
+
+    Each method gets the section's `Maintenance` (its options, threshold, segments and
+    the tonnage of each segment's last tamping, ``last``).
+    """
+
+    def next_due(self, m: Maintenance, mgt: float) -> float:
+        """Next tonnage after ``mgt`` [MGT] at which it tamps whatever the track (a step
+        ends there); inf: none."""
+        return np.inf
+
+    def due(self, m: Maintenance, mgt: float, sd) -> np.ndarray:
+        """Segments to tamp at the step end ``mgt`` [MGT] given the D1 SD (rail,
+        segment) [mm]."""
+        return np.array([], dtype=int)
+
+    def until_due(self, m: Maintenance, mgt: float, settle, geometry, extent,
+                  segment_length: float, cap: float) -> float:  # fmt: skip
+        """Longest step from ``mgt`` [MGT], at most ``cap``, before a segment may be due (the
+        step ends there, so that the tamping comes at its tonnage); ``settle(dm)`` is the
+        step's settlement increment [m] against its tonnage [MGT]."""
+        return cap
+
+
+class FixedPolicy(Policy):
+    """``policy = "fixed"``: every segment every ``interval_mgt``."""
+
+    def next_due(self, m: Maintenance, mgt: float) -> float:
+        """See `Policy.next_due`: the next multiple of ``interval_mgt``."""
+        step = m.o.interval_mgt
+        assert step is not None  # required by the "fixed" policy (the model's check)
+        return (np.floor(mgt / step + 1e-9) + 1) * step
+
+    def due(self, m: Maintenance, mgt: float, sd) -> np.ndarray:
+        """See `Policy.due`: every segment at a multiple of ``interval_mgt``."""
+        step = m.o.interval_mgt
+        assert step is not None  # required by the "fixed" policy (the model's check)
+        hit = np.isclose(mgt, np.round(mgt / step) * step)
+        return np.arange(m.starts.size) if hit and mgt > 0 else np.array([], int)
+
+
+class ThresholdPolicy(Policy):
+    """``policy = "threshold"``: a segment whose D1 SD reaches the threshold on either
+    rail, ``min_interval_mgt`` after its last tamping, with its ``neighbours`` and the
+    adjacent segments past the alert limit."""
+
+    def due(self, m: Maintenance, mgt: float, sd) -> np.ndarray:
+        """See `Policy.due`."""
+        ready = mgt - m.last >= m.o.min_interval_mgt
+        worst = np.max(sd, axis=0)
+        over = np.flatnonzero((worst >= m.threshold * (1 - DUE_MARGIN)) & ready)
+        over = np.union1d(over, sorted(m.expected)).astype(int)
+        m.expected = set()
+        # the machine is there: the segments next to the stretch that are past the alert
+        # limit go with it, and theirs next to them
+        alert = (worst >= m.o.alert_fraction * m.threshold) & ready
+        chosen = np.isin(np.arange(worst.size), over)
+        for order in (slice(None), slice(None, None, -1)):  # grow right, then left
+            grown, run = chosen[order].copy(), False
+            for i, (c, a) in enumerate(zip(chosen[order], alert[order], strict=True)):
+                run = c or (run and a)
+                grown[i] = run
+            chosen[order] = grown
+        over = np.flatnonzero(chosen)
+        k = m.o.neighbours
+        near = {j for i in over for j in range(i - k, i + k + 1) if 0 <= j < m.starts.size}
+        return np.array(sorted(near), dtype=int)
+
+    def until_due(self, m: Maintenance, mgt: float, settle, geometry, extent,
+                  segment_length: float, cap: float) -> float:  # fmt: skip
+        """Traffic until a segment that may be tamped reaches the threshold [MGT], at most
+        ``cap`` and at most until the next segment may be tamped again (its minimum
+        interval passes).
+
+        The rail is taken to follow the settlement increment ``settle(dm)`` [m] at the
+        sleepers; the step ends where the D1 SD so predicted reaches the threshold, so that
+        the tamping comes at its tonnage and not up to a step late. The segment that
+        reaches it is then due at the step end (`due`), whatever the rail-seat load updates
+        within the step did to its D1 SD.
+        """
+        wait = m.last + m.o.min_interval_mgt - mgt  # until each segment may be tamped
+        cap = min(cap, float(wait[wait > 0].min(initial=np.inf)))
+        ready = wait <= 0
+        if not ready.any():
+            return cap
+        x, target = geometry.distance, m.threshold
+
+        def worst(dm):  # the predicted D1 SD of the segments ready, worst rail [mm]
+            e = settle(dm)
+            moved = {r: geometry.profile(r) + np.interp(x, m.position, e[k])
+                     for k, r in enumerate(RAILS)}  # fmt: skip
+            sd = m.d1_sd(dataclasses.replace(geometry, **moved), extent, segment_length)
+            return np.where(ready, sd.max(axis=0), -np.inf)
+
+        def excess(dm):
+            return float(worst(dm).max()) - target
+
+        if excess(cap) <= 0 or excess(0.0) >= 0:
+            return cap
+        dm = brentq(excess, 0.0, cap, xtol=1e-9 * cap, rtol=1e-6)
+        m.expected = {int(np.argmax(worst(dm)))}
+        return dm
+
+
+POLICIES: dict[str, type[Policy]] = {"threshold": ThresholdPolicy, "fixed": FixedPolicy}
+"""Registry of maintenance policies by name; add an entry to plug in another policy."""
 
 
 def _contiguous(segments) -> list[list[int]]:

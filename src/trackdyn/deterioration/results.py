@@ -1,4 +1,4 @@
-"""The deterioration results as one xarray Dataset; geometry quality and maintenance trigger."""
+"""The deterioration results as one xarray Dataset, and the maintenance trigger."""
 
 from __future__ import annotations
 
@@ -8,61 +8,13 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from trackdyn.track.quality import LevelFilter, Segments, longitudinal_level
+from trackdyn.deterioration.quality import D1Assessment
+from trackdyn.deterioration.record import LoopRecord
+from trackdyn.track.quality import longitudinal_level
 from trackdyn.track.track import RAILS
 
 HANGING_GAP = 0.1e-3
 """Gap above which a sleeper counts as hanging in ``hanging_sleepers`` [m]."""
-
-
-def d1_sd(geometry, extent, segment_length: float):
-    """D1 standard deviation of each rail per segment [mm], and the segment bounds [m].
-
-    Parameters
-    ----------
-    geometry : Geometry
-        Unloaded space curve.
-    extent : tuple of float
-        Part of the track to assess (where geometry and supports overlap) [m].
-    segment_length : float
-        Segment length [m].
-    """
-    return D1Assessment(extent, segment_length)(geometry)
-
-
-class D1Assessment:
-    """`d1_sd` of many geometries, the filter and the segments set up once for a grid of
-    distances (`trackdyn.track.quality.LevelFilter`, `Segments`) and kept while the
-    geometries stay on it: the deterioration loop assesses every step's geometry, and
-    the maintenance each trial step's, on the same grid.
-
-    Parameters
-    ----------
-    extent, segment_length
-        As `d1_sd`.
-    """
-
-    def __init__(self, extent, segment_length: float):
-        self.extent, self.segment_length = extent, segment_length
-        self._grid: tuple = ()  # distance, the part inside, its filter and segments
-
-    def _on(self, distance) -> tuple:
-        if not self._grid or not np.array_equal(self._grid[0], distance):
-            inside = (distance >= self.extent[0]) & (distance <= self.extent[1])
-            x = distance[inside]
-            self._grid = (distance, inside, LevelFilter(x, "D1"), Segments(x, self.segment_length))
-        return self._grid
-
-    def rail(self, distance, profile):
-        """`d1_sd` of one rail's ``profile`` at ``distance``: segment starts and ends [m] and
-        the D1 standard deviation of each segment [mm]."""
-        _, inside, level, segments = self._on(distance)
-        return segments.starts, segments.ends, segments.sd(level(profile[inside]))
-
-    def __call__(self, geometry):
-        """As `d1_sd`."""
-        tables = [self.rail(geometry.distance, geometry.profile(r)) for r in RAILS]
-        return np.array([sd for _, _, sd in tables]), tables[0][0], tables[0][1]
 
 
 def trigger_mgt(mgt, sd, threshold: float):
@@ -96,8 +48,7 @@ def trigger_mgt(mgt, sd, threshold: float):
     return out
 
 
-def make_dataset(track, history, steps, snap_at, record, timing, traffic, law,
-                 options) -> xr.Dataset:  # fmt: skip
+def make_dataset(record: LoopRecord) -> xr.Dataset:
     """Assemble the loop's record into a Dataset with units in the attributes.
 
     Variables: ``settlement`` (mgt, rail, sleeper) [m], ballast settlement under each
@@ -119,190 +70,205 @@ def make_dataset(track, history, steps, snap_at, record, timing, traffic, law,
     renewal), ``d1_sd_before`` and ``d1_sd_after`` (intervention, rail) [mm] and
     ``intervention_lift`` [m], the mean lift; ``interventions`` (segment), how many each
     segment had. With maintenance, the state stored at a tonnage is the one before any
-    tamping at that tonnage.
+    tamping at that tonnage. The attributes hold the law, the traffic, the seconds spent
+    and the loop options in SI (`LoopOptions.in_si`, ``option_<name>``).
 
     Parameters
     ----------
-    track : Track
-        The section as measured (initial geometry, supports).
-    history : dict
-        ``mgt`` [MGT], ``settlement`` [m], ``geometry`` and ``hanging_gap`` [m] after each
-        step, initial first.
-    steps : dict
-        ``start``, ``end`` [MGT], ``peak_load`` [N], ``max_settlement`` [m],
-        ``load_updates`` and ``vehicle_runs`` per step.
-    snap_at : ndarray
-        Snapshot tonnages, each one of ``history["mgt"]`` [MGT].
-    record : dict
-        ``cycles``, load cycles applied per rail and sleeper [-]; ``rate``, the
-        settlement-rate factor per rail and sleeper [-]; ``by_vehicle``, each vehicle's
-        part of the settlement (vehicle, rail, sleeper) [m]; ``kind``, the zone kind per
-        sleeper; ``interventions``, the `Intervention` list of the maintenance.
-    timing : dict
-        Seconds spent in ``vehicle`` runs, ``beam`` solves and in ``total``.
-    traffic : sequence of Traffic
-        The traffic mix.
-    law : SettlementLaw
-        The settlement law.
-    options : LoopOptions
-        The loop options.
+    record : LoopRecord
+        What the loop recorded (`trackdyn.deterioration.record`).
     """
-    mgt = np.array(history["mgt"])
-    pos = track.supports.position
-    extent = track.extent
-    assess = D1Assessment(extent, options.segment_length)
-    quality = [assess(g) for g in history["geometry"]]
-    sd = np.array([q[0] for q in quality])
+    mgt = np.array([s.mgt for s in record.states])
+    assess = D1Assessment(record.track.extent, record.options.segment_length)
+    quality = [assess(s.geometry) for s in record.states]
     starts, ends = quality[0][1], quality[0][2]
-    trigger = trigger_mgt(mgt, sd, options.threshold_sd_mm)
-    snap_index = [int(np.argmin(np.abs(mgt - m))) for m in snap_at]
-    g0 = track.geometry
-    profiles = np.array([[history["geometry"][k].profile(r) for r in RAILS] for k in snap_index])
-    n_steps = len(steps["start"])
-    done = record["interventions"]
-    kinds = np.array([i.kind for i in done], dtype=str)
+    snap_index = [int(np.argmin(np.abs(mgt - m))) for m in record.snap_at]
+    variables = {
+        **_state_variables(record, mgt, np.array([q[0] for q in quality]), snap_index),
+        **_section_variables(record),
+        **_intervention_variables(record.interventions, starts.size),
+        **_step_variables(record.steps, record.track.supports.position.size),
+    }
+    coords = {
+        "mgt": ("mgt", mgt, {"units": "MGT", "long_name": "accumulated traffic"}),
+        "rail": list(RAILS),
+        "vehicle": [t.label or t.vehicle.name for t in record.traffic],
+        "sleeper_distance": ("sleeper", record.track.supports.position, {"units": "m"}),
+        "distance": ("distance", record.track.geometry.distance, {"units": "m"}),
+        "snapshot_mgt": ("snapshot", mgt[snap_index], {"units": "MGT"}),
+        "segment_start": ("segment", starts, {"units": "m"}),
+        "segment_end": ("segment", ends, {"units": "m"}),
+    }
+    return xr.Dataset(variables, coords=coords, attrs=_attributes(record))
+
+
+def _state_variables(record: LoopRecord, mgt, sd, snap_index) -> dict:
+    """The variables of the stored states: settlement, D1 SD and its triggers, the
+    snapshots' profiles, the hanging sleepers."""
+    trigger = trigger_mgt(mgt, sd, record.options.threshold_sd_mm)
+    segments = sd.shape[-1]
+    first = _first(record.interventions, segments)
+    geometries = [record.states[k].geometry for k in snap_index]
+    profiles = np.array([[g.profile(r) for r in RAILS] for g in geometries])
+    gaps = np.array([s.hanging_gap for s in record.states])
+    threshold = record.options.threshold_sd_mm
+    return {
+        "settlement": (
+            ("mgt", "rail", "sleeper"),
+            np.array([s.settlement for s in record.states]),
+            {"units": "m", "long_name": "sleeper settlement", "positive": "down"},
+        ),
+        "d1_sd": (
+            ("mgt", "rail", "segment"),
+            sd,
+            {"units": "mm", "long_name": "standard deviation of D1 longitudinal level"},
+        ),
+        "trigger_mgt": (
+            ("rail", "segment"),
+            trigger,
+            {"units": "MGT", "long_name": f"tonnage at D1 SD >= {threshold} mm"},
+        ),
+        "trigger_mgt_any_rail": (
+            "segment",
+            np.minimum(trigger.min(axis=0), first),
+            {"units": "MGT", "long_name": "first tonnage at which either rail triggers"},
+        ),
+        "profile": (
+            ("snapshot", "rail", "distance"),
+            profiles,
+            {"units": "m", "long_name": "unloaded vertical space curve", "positive": "down"},
+        ),
+        "hanging_gap": (
+            ("mgt", "rail", "sleeper"),
+            gaps,
+            {"units": "m", "long_name": "gap under the sleeper with the rail at rest"},
+        ),
+        "hanging_sleepers": (
+            ("mgt", "rail"),
+            np.sum(gaps > HANGING_GAP, axis=-1),
+            {"units": "1", "long_name": f"sleepers hanging by more than {HANGING_GAP} m"},
+        ),
+    }
+
+
+def _section_variables(record: LoopRecord) -> dict:
+    """The variables of the section's ballast: rate field, zones, each vehicle's part of
+    the settlement, the load cycles applied."""
+    return {
+        "rate_factor": (
+            ("rail", "sleeper"),
+            record.rate,
+            {"units": "1", "long_name": "settlement-rate factor of the ballast"},
+        ),
+        "zone_kind": ("sleeper", record.kind, {"long_name": "zone of the track"}),
+        "settlement_by_vehicle": (
+            ("vehicle", "rail", "sleeper"),
+            record.by_vehicle,
+            {
+                "units": "m",
+                "long_name": "each vehicle's part of the settlement",
+                "positive": "down",
+            },
+        ),
+        "load_cycles": (("rail", "sleeper"), record.cycles, {"units": "1"}),
+    }
+
+
+def _intervention_variables(done: list, segments: int) -> dict:
+    """The variables of the maintenance's interventions, and how many each segment had."""
     segment_of = np.array([i.segment for i in done], dtype=int)
     before = np.array([i.sd_before for i in done]).reshape(len(done), len(RAILS))
     after = np.array([i.sd_after for i in done]).reshape(len(done), len(RAILS))
-    peak = np.array(steps["peak_load"]).reshape(n_steps, len(RAILS), pos.size)
-    ds = xr.Dataset(
-        {
-            "settlement": (
-                ("mgt", "rail", "sleeper"),
-                np.array(history["settlement"]),
-                {"units": "m", "long_name": "sleeper settlement", "positive": "down"},
-            ),
-            "d1_sd": (
-                ("mgt", "rail", "segment"),
-                sd,
-                {"units": "mm", "long_name": "standard deviation of D1 longitudinal level"},
-            ),
-            "trigger_mgt": (
-                ("rail", "segment"),
-                trigger,
-                {"units": "MGT", "long_name": f"tonnage at D1 SD >= {options.threshold_sd_mm} mm"},
-            ),
-            "trigger_mgt_any_rail": (
-                "segment",
-                np.minimum(trigger.min(axis=0), _first(done, starts.size)),
-                {"units": "MGT", "long_name": "first tonnage at which either rail triggers"},
-            ),
-            "profile": (
-                ("snapshot", "rail", "distance"),
-                profiles,
-                {"units": "m", "long_name": "unloaded vertical space curve", "positive": "down"},
-            ),
-            "hanging_gap": (
-                ("mgt", "rail", "sleeper"),
-                np.array(history["hanging_gap"]),
-                {"units": "m", "long_name": "gap under the sleeper with the rail at rest"},
-            ),
-            "hanging_sleepers": (
-                ("mgt", "rail"),
-                np.sum(np.array(history["hanging_gap"]) > HANGING_GAP, axis=-1),
-                {"units": "1", "long_name": f"sleepers hanging by more than {HANGING_GAP} m"},
-            ),
-            "rate_factor": (
-                ("rail", "sleeper"),
-                record["rate"],
-                {"units": "1", "long_name": "settlement-rate factor of the ballast"},
-            ),
-            "zone_kind": ("sleeper", record["kind"], {"long_name": "zone of the track"}),
-            "settlement_by_vehicle": (
-                ("vehicle", "rail", "sleeper"),
-                record["by_vehicle"],
-                {
-                    "units": "m",
-                    "long_name": "each vehicle's part of the settlement",
-                    "positive": "down",
-                },
-            ),
-            "load_cycles": (("rail", "sleeper"), record["cycles"], {"units": "1"}),
-            "intervention_mgt": (
-                "intervention",
-                np.array([i.mgt for i in done], dtype=float),
-                {"units": "MGT", "long_name": "tonnage of the tamping or renewal"},
-            ),
-            "intervention_segment": ("intervention", segment_of, {"long_name": "segment"}),
-            "intervention_kind": ("intervention", kinds, {"long_name": "tamping or renewal"}),
-            "d1_sd_before": (
-                ("intervention", "rail"),
-                before,
-                {"units": "mm", "long_name": "D1 SD of the segment before the intervention"},
-            ),
-            "d1_sd_after": (
-                ("intervention", "rail"),
-                after,
-                {"units": "mm", "long_name": "D1 SD of the segment after the intervention"},
-            ),
-            "intervention_lift": (
-                "intervention",
-                np.array([i.lift for i in done], dtype=float),
-                {"units": "m", "long_name": "mean lift of the segment's sleepers"},
-            ),
-            "interventions": (
-                "segment",
-                np.bincount(segment_of, minlength=starts.size),
-                {"units": "1", "long_name": "tampings and renewals of the segment"},
-            ),
-            "step_start": ("step", np.array(steps["start"]), {"units": "MGT"}),
-            "step_end": ("step", np.array(steps["end"]), {"units": "MGT"}),
-            "step_max_settlement": (
-                "step",
-                np.array(steps["max_settlement"]),
-                {"units": "m", "long_name": "largest settlement of any sleeper in the step"},
-            ),
-            "step_load_updates": (
-                "step",
-                np.array(steps["load_updates"], dtype=int),
-                {"units": "1", "long_name": "rail-seat load updates (beam solves) in the step"},
-            ),
-            "step_vehicle_runs": (
-                "step",
-                np.array(steps["vehicle_runs"], dtype=int),
-                {"units": "1", "long_name": "vehicles run in the step (the others held)"},
-            ),
-            "peak_rail_seat_load": (
-                ("step", "rail", "sleeper"),
-                peak,
-                {"units": "N", "long_name": "largest rail-seat load of the step"},
-            ),
+    return {
+        "intervention_mgt": (
+            "intervention",
+            np.array([i.mgt for i in done], dtype=float),
+            {"units": "MGT", "long_name": "tonnage of the tamping or renewal"},
+        ),
+        "intervention_segment": ("intervention", segment_of, {"long_name": "segment"}),
+        "intervention_kind": (
+            "intervention",
+            np.array([i.kind for i in done], dtype=str),
+            {"long_name": "tamping or renewal"},
+        ),
+        "d1_sd_before": (
+            ("intervention", "rail"),
+            before,
+            {"units": "mm", "long_name": "D1 SD of the segment before the intervention"},
+        ),
+        "d1_sd_after": (
+            ("intervention", "rail"),
+            after,
+            {"units": "mm", "long_name": "D1 SD of the segment after the intervention"},
+        ),
+        "intervention_lift": (
+            "intervention",
+            np.array([i.lift for i in done], dtype=float),
+            {"units": "m", "long_name": "mean lift of the segment's sleepers"},
+        ),
+        "interventions": (
+            "segment",
+            np.bincount(segment_of, minlength=segments),
+            {"units": "1", "long_name": "tampings and renewals of the segment"},
+        ),
+    }
+
+
+def _step_variables(steps: list, sleepers: int) -> dict:
+    """The variables of the tonnage steps."""
+    peak = np.array([s.peak_load for s in steps]).reshape(len(steps), len(RAILS), sleepers)
+    return {
+        "step_start": ("step", np.array([s.start for s in steps]), {"units": "MGT"}),
+        "step_end": ("step", np.array([s.end for s in steps]), {"units": "MGT"}),
+        "step_max_settlement": (
+            "step",
+            np.array([s.max_settlement for s in steps]),
+            {"units": "m", "long_name": "largest settlement of any sleeper in the step"},
+        ),
+        "step_load_updates": (
+            "step",
+            np.array([s.load_updates for s in steps], dtype=int),
+            {"units": "1", "long_name": "rail-seat load updates (beam solves) in the step"},
+        ),
+        "step_vehicle_runs": (
+            "step",
+            np.array([s.vehicle_runs for s in steps], dtype=int),
+            {"units": "1", "long_name": "vehicles run in the step (the others held)"},
+        ),
+        "peak_rail_seat_load": (
+            ("step", "rail", "sleeper"),
+            peak,
+            {"units": "N", "long_name": "largest rail-seat load of the step"},
+        ),
+    }
+
+
+def _attributes(record: LoopRecord) -> dict:
+    """The Dataset's attributes: law, traffic, steps, seconds, sources, options in SI."""
+    traffic, timing, track = record.traffic, record.timing, record.track
+    return {
+        "settlement_law": type(record.law).__name__,
+        "settlement_parameters_SI": repr(dataclasses.asdict(record.law)),
+        "passages_per_mgt": ";".join(f"{t.passages_per_mgt:.17g}" for t in traffic),
+        "traffic": "; ".join(
+            f"{t.label or t.vehicle.name} at {t.speed_kmh:g} km/h, "
+            f"{t.passages_per_mgt:g} passages/MGT"
+            for t in traffic
+        ),
+        "gross_tonnes_per_mgt_of_traffic": sum(
+            t.gross_mass(record.options.run.model) / 1e3 * t.passages_per_mgt for t in traffic
+        ),
+        "steps": len(record.steps),
+        "time_vehicle_runs_s": timing.vehicle,
+        "time_beam_solves_s": timing.beam,
+        "time_bookkeeping_s": timing.total - timing.vehicle - timing.beam,
+        "geometry_source": track.geometry.where,
+        "supports_source": track.supports.where,
+        **{
+            f"option_{k}": "default" if v is None else str(v) if isinstance(v, tuple) else v
+            for k, v in _flat_options(record.options).items()
         },
-        coords={
-            "mgt": ("mgt", mgt, {"units": "MGT", "long_name": "accumulated traffic"}),
-            "rail": list(RAILS),
-            "vehicle": [t.label or t.vehicle.name for t in traffic],
-            "sleeper_distance": ("sleeper", pos, {"units": "m"}),
-            "distance": ("distance", g0.distance, {"units": "m"}),
-            "snapshot_mgt": ("snapshot", mgt[snap_index], {"units": "MGT"}),
-            "segment_start": ("segment", starts, {"units": "m"}),
-            "segment_end": ("segment", ends, {"units": "m"}),
-        },
-        attrs={
-            "settlement_law": type(law).__name__,
-            "settlement_parameters_SI": repr(dataclasses.asdict(law)),
-            "passages_per_mgt": ";".join(f"{t.passages_per_mgt:.17g}" for t in traffic),
-            "traffic": "; ".join(
-                f"{t.label or t.vehicle.name} at {t.speed * 3.6:g} km/h, "
-                f"{t.passages_per_mgt:g} passages/MGT"
-                for t in traffic
-            ),
-            "gross_tonnes_per_mgt_of_traffic": sum(
-                t.gross_mass(options.run.model) / 1e3 * t.passages_per_mgt for t in traffic
-            ),
-            "steps": n_steps,
-            "time_vehicle_runs_s": timing["vehicle"],
-            "time_beam_solves_s": timing["beam"],
-            "time_bookkeeping_s": timing["total"] - timing["vehicle"] - timing["beam"],
-            "geometry_source": g0.where,
-            "supports_source": track.supports.where,
-            **{
-                f"option_{k}": "default" if v is None else str(v) if isinstance(v, tuple) else v
-                for k, v in _flat_options(options).items()
-            },
-        },
-    )
-    return ds
+    }
 
 
 def _first(done, segments: int) -> np.ndarray:
@@ -316,8 +282,9 @@ def _first(done, segments: int) -> np.ndarray:
 
 
 def _flat_options(options) -> dict:
-    """Loop options with the run options spelled out as ``run_<name>``."""
-    flat = {name: getattr(options, name) for name in type(options).model_fields}
+    """Loop options in SI (`LoopOptions.in_si`), the run and maintenance options spelled
+    out as ``run_<name>`` and ``maintenance_<name>``."""
+    flat = options.in_si()
     run, maintenance = flat.pop("run"), flat.pop("maintenance")
     flat.update({f"run_{k}": v for k, v in run.model_dump().items()})
     if maintenance is not None:

@@ -4,7 +4,7 @@ A `SectionTask` is the whole loop of one section; it carries the file paths, the
 the law and the options, never the track arrays, and its section is read in the worker.
 `run_sections` sends them through `trackdyn.parallel.run_tasks` up to `TOGETHER` at a
 time, stepped together (`run_group`) so that their vehicle runs share the solver's vector
-lanes; a failed run is reported with its section's name.
+lanes; a section that fails gives a `Failure` named with the section.
 """
 
 from __future__ import annotations
@@ -12,11 +12,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from trackdyn.data import load_track
-from trackdyn.deterioration.loads import step_together
-from trackdyn.deterioration.loop import LoopOptions, predicting
+from trackdyn.deterioration.driver import step_together
+from trackdyn.deterioration.loop import SectionLoop
+from trackdyn.deterioration.options import LoopOptions
+from trackdyn.deterioration.results import make_dataset
 from trackdyn.deterioration.settlement import SettlementLaw
 from trackdyn.deterioration.zones import check_zones
-from trackdyn.errors import TrackdynInputError, error_message
+from trackdyn.errors import Failure
 
 
 @dataclass(frozen=True)
@@ -76,8 +78,8 @@ a worker process, when a section's beam held 25 MB per km; its windows no longer
 their inverses, 11 MB per km: now 556 MB, about 20 MB per km of section)."""
 
 
-def run_section(task: SectionTask) -> dict:
-    """Run the loop on one section; never raises (a failure is returned as ``error``).
+def run_section(task: SectionTask):
+    """Run the loop on one section; never raises (a failure is returned).
 
     Parameters
     ----------
@@ -86,13 +88,14 @@ def run_section(task: SectionTask) -> dict:
 
     Returns
     -------
-    dict
-        ``name`` and ``dataset``, or ``name`` and ``error``.
+    xarray.Dataset or Failure
+        The section's Dataset (its ``section`` attribute its name), or its `Failure`,
+        named with it (``"section <name>: ..."``).
     """
     return run_group([task])[0]
 
 
-def run_group(tasks: list[SectionTask]) -> list[dict]:
+def run_group(tasks: list[SectionTask]) -> list:
     """Run the loops of several sections stepped together (`step_together`: their vehicle
     runs share the solver's vector lanes); never raises. Each section's result is what
     `run_section` gives for it alone; a tonnage progress bar only for a section alone.
@@ -104,26 +107,27 @@ def run_group(tasks: list[SectionTask]) -> list[dict]:
 
     Returns
     -------
-    list of dict
-        Per section, ``name`` and ``dataset``, or ``name`` and ``error``.
+    list
+        Per section, its Dataset or its `Failure` (as `run_section`).
     """
-    loops, results = {}, [{"name": t.section.name} for t in tasks]
+    loops: dict[int, SectionLoop] = {}
+    results: list = [None] * len(tasks)
     for i, task in enumerate(tasks):
         try:
             track = load_track(task.section.geometry, task.section.supports)
             position = track.supports.position
             check_zones(task.zones, (position[0], position[-1]), task.section.zones or "zones")
+            loops[i] = SectionLoop(track, task.traffic, task.law, task.options, zones=task.zones)
         except Exception as exc:  # noqa: BLE001 - reported with the section, others go on
-            results[i]["error"] = error_message(exc)
-            continue
-        loops[i] = predicting(track, task.traffic, task.law, task.options, zones=task.zones,
-                              progress=task.progress and len(tasks) == 1)  # fmt: skip
-    for i, out in zip(loops, step_together(list(loops.values())), strict=True):
-        if isinstance(out, Exception):
-            results[i]["error"] = error_message(out)
+            results[i] = Failure.of(exc).named(f"section {task.section.name}")
+    progress = len(tasks) == 1 and tasks[0].progress
+    for i, out in zip(loops, step_together(list(loops.values()), progress), strict=True):
+        name = tasks[i].section.name
+        if isinstance(out, Failure):
+            results[i] = out.named(f"section {name}")
         else:
-            out.attrs["section"] = results[i]["name"]
-            results[i]["dataset"] = out
+            ds = results[i] = make_dataset(out)
+            ds.attrs["section"] = name
     return results
 
 
@@ -131,7 +135,8 @@ def run_sections(tasks, *, workers=None, scheduler=None, progress=False) -> list
     """Run the tasks through `run_tasks`; the Datasets in task order.
 
     One section without a scheduler runs in this process unless ``workers`` says
-    otherwise. A failed section is a `TrackdynInputError` naming it (nothing is written).
+    otherwise. A failed section is raised (`Failure.error`), its message naming it
+    (nothing is written).
 
     Parameters
     ----------
@@ -152,8 +157,8 @@ def run_sections(tasks, *, workers=None, scheduler=None, progress=False) -> list
         tasks, run_group, workers=workers, scheduler=scheduler, progress=progress,
         label="sections", together=TOGETHER,
     )  # fmt: skip
-    failed = [r for r in results if "error" in r]
+    failed = [r for r in results if isinstance(r, Failure)]
     if failed:
         more = f" ({len(failed) - 1} more sections failed)" if len(failed) > 1 else ""
-        raise TrackdynInputError(f"section {failed[0]['name']}: {failed[0]['error']}{more}")
-    return [r["dataset"] for r in results]
+        raise Failure(failed[0].status, f"{failed[0].message}{more}").error()
+    return results

@@ -28,7 +28,7 @@ import numpy as np
 from scipy import signal
 from scipy.optimize import brentq
 
-from trackdyn.deterioration.results import D1Assessment
+from trackdyn.deterioration.quality import D1Assessment
 from trackdyn.track.quality import WAVEBANDS, longitudinal_level, to_uniform_grid
 from trackdyn.track.track import RAILS, Geometry
 

@@ -26,7 +26,7 @@ rate_correlation_length_m = 3   # its correlation length along the track (illust
 seed = 0
 # rate_field = "rate_field.csv" # or the factor per rail seat (trackdyn calibrate's file)
 
-[loop]
+[loop]                          # trackdyn.deterioration.LoopOptions, its [loop] keys
 total_mgt = 50
 max_step_settlement_mm = 0.5
 snapshot_every_mgt = 10
@@ -63,23 +63,22 @@ from pydantic import (
     Field,
     NonNegativeFloat,
     PositiveFloat,
-    PositiveInt,
     StrictFloat,
+    field_serializer,
     field_validator,
     model_validator,
 )
 
-from trackdyn.deterioration.loop import LoopOptions
 from trackdyn.deterioration.maintenance import MaintenanceOptions
+from trackdyn.deterioration.options import LoopOptions
 from trackdyn.errors import TrackdynInputError
 from trackdyn.limits import MAX_SPEED_KMH
 from trackdyn.options import RunOptions, Strict, load_toml, vehicle_source
 
 
-def _default(name: str, scale: float = 1.0):
-    """The default of a `LoopOptions` field, times ``scale`` for the file's unit."""
-    value = LoopOptions.model_fields[name].default
-    return value if scale == 1.0 else value * scale
+def _default(name: str):
+    """The default of a `LoopOptions` field (the same name and unit as the file's key)."""
+    return LoopOptions.model_fields[name].default
 
 
 class TrafficSpec(Strict):
@@ -116,7 +115,7 @@ class SettlementSpec(Strict):
     file: Path | None = None
     overrides: dict[str, StrictFloat] = Field(default_factory=dict)
     rate_cov: NonNegativeFloat = _default("rate_cov")
-    rate_correlation_length_m: PositiveFloat = _default("rate_correlation_length")
+    rate_correlation_length_m: PositiveFloat = _default("rate_correlation_length_m")
     seed: int = Field(0, ge=0)
     rate_field: Path | None = None
 
@@ -134,21 +133,6 @@ class SettlementSpec(Strict):
         if value not in LAWS:
             raise ValueError(f"unknown settlement law {value!r}; known: {', '.join(LAWS)}")
         return value
-
-
-class LoopSpec(Strict):
-    """``[loop]``: ``total_mgt`` [MGT], ``max_step_settlement_mm`` [mm],
-    ``snapshot_every_mgt`` [MGT], ``threshold_sd_mm`` [mm] (D1 SD of maintenance),
-    ``segment_length_m`` [m], ``max_steps``, ``min_step_passages`` [-] (the first step:
-    one train); the defaults are those of `LoopOptions`."""
-
-    total_mgt: PositiveFloat = _default("total_mgt")
-    max_step_settlement_mm: PositiveFloat = _default("max_step_settlement", 1e3)
-    snapshot_every_mgt: PositiveFloat = _default("snapshot_every_mgt")
-    threshold_sd_mm: PositiveFloat = _default("threshold_sd_mm")
-    segment_length_m: PositiveFloat = _default("segment_length")
-    max_steps: PositiveInt = _default("max_steps")
-    min_step_passages: PositiveFloat = _default("min_step_passages")
 
 
 class TrackSectionsSpec(Strict):
@@ -205,7 +189,7 @@ class DeteriorationScenario(Strict):
     run: RunOptions = RunOptions()
     traffic: list[TrafficSpec] = Field(default_factory=lambda: list(DEFAULT_TRAFFIC))
     settlement: SettlementSpec = SettlementSpec()
-    loop: LoopSpec = LoopSpec()
+    loop: LoopOptions = LoopOptions()
     track: TrackSectionsSpec = TrackSectionsSpec()
     maintenance: MaintenanceSpec | None = None
 
@@ -220,6 +204,22 @@ class DeteriorationScenario(Strict):
             raise ValueError("give the horizon as [loop] total_mgt or as [maintenance] "
                              "horizon_years and annual_mgt, not both")  # fmt: skip
         return self
+
+    @field_validator("loop", mode="before")
+    @classmethod
+    def _loop_table(cls, value):
+        table = LoopOptions.loop_table()
+        given = value if isinstance(value, dict) else {}
+        other = [k for k in given if k in LoopOptions.model_fields and k not in table]
+        if other:
+            raise ValueError(f"{other[0]!r} is not a key of [loop]; its keys are "
+                             f"{', '.join(table)}")  # fmt: skip
+        return value
+
+    @field_serializer("loop", mode="wrap")
+    def _loop_keys(self, loop, handler):
+        table = LoopOptions.loop_table()
+        return {k: v for k, v in handler(loop).items() if k in table}
 
     @property
     def horizon_mgt(self) -> float:
@@ -251,7 +251,8 @@ def load_deterioration(path=None) -> tuple[DeteriorationScenario, Path]:
 
 
 def loop_options(spec: DeteriorationScenario, seed, example: bool = False):
-    """`LoopOptions` of a scenario.
+    """`LoopOptions` of a scenario: its ``[loop]`` table and the loop options of its other
+    tables, by name (the same names and units).
 
     Parameters
     ----------
@@ -262,23 +263,17 @@ def loop_options(spec: DeteriorationScenario, seed, example: bool = False):
     example : bool
         The section is the built-in example (starts tamped unless ``[track] start`` says).
     """
-    lp = spec.loop
-    return LoopOptions(
-        total_mgt=spec.horizon_mgt,
-        max_step_settlement=lp.max_step_settlement_mm * 1e-3,
-        snapshot_every_mgt=lp.snapshot_every_mgt,
-        threshold_sd_mm=lp.threshold_sd_mm,
-        segment_length=lp.segment_length_m,
-        max_steps=lp.max_steps,
-        min_step_passages=lp.min_step_passages,
-        rate_cov=spec.settlement.rate_cov,
-        rate_correlation_length=spec.settlement.rate_correlation_length_m,
-        seed=seed,
-        run=spec.run,
-        rail=spec.track.rail,
-        start=spec.track.start or ("tamped" if example else "as measured"),
-        maintenance=None if spec.maintenance is None else spec.maintenance.options(),
-    )
+    s = spec.settlement
+    return spec.loop.model_copy(update={
+        "total_mgt": spec.horizon_mgt,
+        "rate_cov": s.rate_cov,
+        "rate_correlation_length_m": s.rate_correlation_length_m,
+        "seed": seed,
+        "run": spec.run,
+        "rail": spec.track.rail,
+        "start": spec.track.start or ("tamped" if example else "as measured"),
+        "maintenance": None if spec.maintenance is None else spec.maintenance.options(),
+    })  # fmt: skip
 
 
 def resolve_inputs(spec: DeteriorationScenario, base: Path):
@@ -298,7 +293,7 @@ def resolve_inputs(spec: DeteriorationScenario, base: Path):
     """
     from trackdyn.deterioration.law_files import load_law
     from trackdyn.deterioration.loads import cycles_per_passage
-    from trackdyn.deterioration.loop import Traffic
+    from trackdyn.deterioration.options import Traffic
     from trackdyn.track.rails import rail_section
     from trackdyn.vehicle.models import build_model
 
@@ -311,7 +306,7 @@ def resolve_inputs(spec: DeteriorationScenario, base: Path):
         except TrackdynInputError as exc:
             raise TrackdynInputError(f"traffic {i + 1}: {exc}") from None
         label = t.label or Path(t.vehicle).stem
-        traffic.append(Traffic(vehicle, t.speed_kmh / 3.6, t.passages_per_mgt, label))
+        traffic.append(Traffic(vehicle, t.speed_kmh, t.passages_per_mgt, label))
     s = spec.settlement
     law = load_law(s.law, None if s.file is None else base / s.file, "open", **s.overrides)
     return traffic, law
