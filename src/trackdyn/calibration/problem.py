@@ -56,7 +56,7 @@ from trackdyn.deterioration.runs import (
     run_group,
     run_sections,
 )
-from trackdyn.errors import Failure, TrackdynInputError
+from trackdyn.errors import TrackdynInputError
 from trackdyn.io import read_supports
 from trackdyn.track.quality import WAVEBANDS
 from trackdyn.track.rails import rail_section
@@ -304,16 +304,15 @@ def run_laws(problem: Calibration, laws, options, *, workers=None, scheduler=Non
     scheduler : str, optional
         Address of a running Dask scheduler.
     keep_failures : bool
-        Return a failed run's one-line message in its place instead of raising.
+        Return a failed run's `Failure` in its place instead of raising.
     """
     tasks = [SectionTask(problem.section, problem.traffic, law, options) for law in laws]
     if not keep_failures:
         return run_sections(tasks, workers=workers, scheduler=scheduler)
     from trackdyn.parallel import run_tasks
 
-    results = run_tasks(tasks, run_group, workers=workers, scheduler=scheduler, label="runs",
-                        together=TOGETHER)  # fmt: skip
-    return [r.message if isinstance(r, Failure) else r for r in results]
+    return run_tasks(tasks, run_group, workers=workers, scheduler=scheduler, label="runs",
+                     together=TOGETHER)  # fmt: skip
 
 
 @dataclass(frozen=True)
