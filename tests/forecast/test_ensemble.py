@@ -37,7 +37,7 @@ def plain(ds):
 
 
 def test_a_member_with_nothing_varied_is_the_deterministic_run(task):
-    same = Members({}, (3, 3), np.zeros(2))  # the deterministic seed, no parameters
+    same = Members({}, np.zeros(2), fresh_fields=False)  # the section's field, nothing varied
     ((first, second),) = run_ensemble([task], same, workers=1)
     xr.testing.assert_identical(plain(first), plain(run_section(task)))
     xr.testing.assert_identical(plain(second), plain(first))
@@ -49,7 +49,7 @@ def test_members_take_their_samples_and_horizons(task):
     tasks = member_tasks(task, members, Growth(10.0, 0.05, 0.02), horizon_years=0.5)
     assert [t.section.name for t in tasks] == ["s member 0", "s member 1", "s member 2"]
     for m, t in enumerate(tasks):
-        assert t.law.K_s == members.parameters["K_s"][m] and t.options.seed == members.seeds[m]
+        assert t.law.K_s == members.parameters["K_s"][m] and t.options.seed == (3, m + 1)
         # half a year of 10 MGT growing at the member's rate (continuous compounding)
         rate = np.log1p(members.growth[m])
         assert t.options.total_mgt == pytest.approx(10.0 * np.expm1(0.5 * rate) / rate)

@@ -76,6 +76,7 @@ from trackdyn.calibration.problem import (
     run_laws,
 )
 from trackdyn.errors import Failure
+from trackdyn.forecast.spread import Posterior
 
 FAILED_RUN_MM = 100.0
 """Residual given to every comparison point of a trial whose run failed (settlement that
@@ -242,6 +243,11 @@ class FitResult:
         (`_joint_covariance`).
     correlation : ndarray
         (parameters, parameters) correlation of the fitted parameters' errors [-].
+    posterior : Posterior
+        The fitted parameters' joint posterior: normal in fit coordinates about the fit,
+        with the covariance the standard errors and correlation come from
+        (`trackdyn.forecast.spread.Posterior`; infinite variances where the surveys do not
+        tell a parameter).
     start : ndarray
         Starting values [SI units].
     law, start_law : SettlementLaw
@@ -269,6 +275,7 @@ class FitResult:
     values: np.ndarray
     standard_errors: np.ndarray
     correlation: np.ndarray
+    posterior: Posterior
     start: np.ndarray
     law: object
     start_law: object
@@ -465,6 +472,7 @@ def fit(problem: Calibration, *, workers=None, scheduler=None, log=None) -> FitR
         values=values,
         standard_errors=np.where(problem.log, values * se_coord, se_coord),
         correlation=_correlation(cov),
+        posterior=Posterior(problem.names, np.asarray(res.x, dtype=float), cov, problem.log),
         start=_values(problem, problem.start()),
         law=law,
         start_law=problem.law,

@@ -112,6 +112,28 @@ def deterioration_table(table, title: str) -> Table:
     return show
 
 
+def forecast_table(table, title: str) -> Table:
+    """The first tamping of every segment in an ensemble forecast: p10, p50, p90 [MGT].
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        ``forecast.csv``'s table (`trackdyn.forecast.summary.forecast_table` per section).
+    title : str
+        Title above the table.
+    """
+    show = Table(title=title)
+    for col in ("section", "segment [m]", "p10 [MGT]", "p50 [MGT]", "p90 [MGT]"):
+        show.add_column(Text(col))
+    first = table[table.quantity == "first_tamping_mgt"]
+    for r in first.itertuples(index=False):
+        shown = ("beyond" if math.isinf(v) else f"{v:.3g}" for v in (r.p10, r.p50, r.p90))
+        show.add_row(r.section, f"{r.segment_start_m:g}-{r.segment_end_m:g}", *shown)
+    if not first.empty:
+        show.caption = "beyond: after the horizon"
+    return show
+
+
 def alignment_table(spec, problem) -> Table:
     """The surveys of a calibration, aligned to the first: shift [m] and correlation.
 

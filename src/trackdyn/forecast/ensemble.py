@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import dataclasses
 
+import numpy as np
+
 from trackdyn.deterioration.runs import SectionTask, run_sections
 from trackdyn.forecast.spread import Growth, Members
 
@@ -35,13 +37,14 @@ def member_tasks(task: SectionTask, members: Members, growth: Growth | None = No
     -------
     list of SectionTask
         One per member, named ``<section> member <m>``; a calibrated rate field given in
-        the options (``rate_factor``) stays as given, otherwise each member draws its own.
+        the options (``rate_factor``) stays as given, otherwise each member draws its own
+        (seed: the section's followed by ``m + 1``).
     """
     out = []
     for m in range(members.count):
         update: dict = {}
-        if task.options.rate_factor is None:
-            update["seed"] = members.seeds[m]
+        if members.fresh_fields and task.options.rate_factor is None:
+            update["seed"] = (*np.atleast_1d(task.options.seed).tolist(), m + 1)
         if growth is not None and horizon_years is not None:
             update["total_mgt"] = float(growth.mgt_by(horizon_years, members.growth[m]))
         options = task.options.model_copy(update=update)

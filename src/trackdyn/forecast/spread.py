@@ -86,16 +86,24 @@ class Posterior:
 
     def __post_init__(self):
         n = len(self.names)
-        cov = np.asarray(self.covariance, dtype=float)
-        if np.shape(self.mean) != (n,) or cov.shape != (n, n) or np.shape(self.log) != (n,):
+        if (
+            np.shape(self.mean) != (n,)
+            or np.shape(self.covariance) != (n, n)
+            or np.shape(self.log) != (n,)
+        ):
             raise TrackdynInputError(f"a posterior of {n} parameters needs {n} values, an "
                                      f"{n} x {n} covariance and {n} log flags")  # fmt: skip
+
+    def check(self, where: str = "posterior") -> None:
+        """Refuse a covariance that cannot be sampled: not finite (a parameter the surveys
+        do not tell), not symmetric or not positive semi-definite."""
+        cov = np.asarray(self.covariance, dtype=float)
         if not np.all(np.isfinite(cov)) or not np.allclose(cov, cov.T, rtol=1e-9, atol=0):
-            raise TrackdynInputError("the posterior's covariance must be finite and "
-                                     "symmetric (a parameter the surveys do not tell cannot "
-                                     "be sampled from it)")  # fmt: skip
+            raise TrackdynInputError(f"{where}: the covariance must be finite and symmetric "
+                                     "(a parameter the surveys do not tell cannot be sampled "
+                                     "from it)")  # fmt: skip
         if np.linalg.eigvalsh(cov).min() < -1e-12 * max(np.abs(cov).max(), 1e-300):
-            raise TrackdynInputError("the posterior's covariance is not positive "
+            raise TrackdynInputError(f"{where}: the covariance is not positive "
                                      "semi-definite")  # fmt: skip
 
     @classmethod
@@ -110,10 +118,72 @@ class Posterior:
         return cls(tuple(names), mean, np.asarray(correlation) * np.outer(se, se), log)
 
     def sample(self, rng, members: int) -> dict[str, np.ndarray]:
-        """``members`` joint samples, per parameter [SI]."""
+        """``members`` joint samples, per parameter [SI] (`check` first)."""
+        self.check()
         theta = rng.multivariate_normal(self.mean, self.covariance, members, method="eigh")
         values = np.where(self.log, np.exp(theta), theta)
         return {name: values[:, i] for i, name in enumerate(self.names)}
+
+
+def posterior_toml(posterior: Posterior, law: str, source: str = "") -> str:
+    """The text of a posterior file (`read_posterior`): the law, the fitted parameters,
+    their log flags, mean and covariance in fit coordinates, full precision.
+
+    Parameters
+    ----------
+    posterior : Posterior
+        The posterior.
+    law : str
+        Name of the settlement law it belongs to (`trackdyn.deterioration.LAWS`).
+    source : str
+        What it comes from, written as a comment.
+    """
+
+    def floats(values) -> str:
+        return "[" + ", ".join(repr(float(v)) for v in values) + "]"
+
+    rows = ",\n  ".join(floats(r) for r in np.asarray(posterior.covariance))
+    return "\n".join([
+        "# The joint posterior of a calibration's fitted settlement-law parameters: normal",
+        "# in fit coordinates (ln of the SI value where log is true), for [forecast] posterior.",
+        *([f"# {source}"] if source else []),
+        f'law = "{law}"',
+        "parameters = [" + ", ".join(f'"{n}"' for n in posterior.names) + "]",
+        "log = [" + ", ".join("true" if v else "false" for v in posterior.log) + "]",
+        f"mean = {floats(posterior.mean)}",
+        f"covariance = [\n  {rows},\n]",
+        "",
+    ])  # fmt: skip
+
+
+def read_posterior(path, law: str) -> Posterior:
+    """The posterior in the file ``path`` (`posterior_toml`), checked to be of ``law``.
+
+    Parameters
+    ----------
+    path : path
+        Posterior TOML file (``trackdyn calibrate`` writes ``posterior.toml``).
+    law : str
+        The scenario's settlement law.
+    """
+    from trackdyn.io import read_toml
+
+    table = read_toml(path)
+    keys = {"law", "parameters", "log", "mean", "covariance"}
+    if set(table) != keys:
+        raise TrackdynInputError(f"{path}: a posterior file has the keys "
+                                 f"{', '.join(sorted(keys))}")  # fmt: skip
+    if table["law"] != law:
+        raise TrackdynInputError(f"{path}: the posterior is of the {table['law']} law, the "
+                                 f"scenario's is {law}")  # fmt: skip
+    try:
+        posterior = Posterior(tuple(table["parameters"]), np.array(table["mean"], dtype=float),
+                              np.array(table["covariance"], dtype=float),
+                              np.array(table["log"], dtype=bool))  # fmt: skip
+    except (TypeError, ValueError) as exc:
+        raise TrackdynInputError(f"{path}: {exc}") from None
+    posterior.check(str(path))
+    return posterior
 
 
 @dataclass(frozen=True)
@@ -170,27 +240,28 @@ class Growth:
 
 @dataclass(frozen=True)
 class Members:
-    """The samples of an ensemble: per member its law parameters, rate-field seed and
-    growth rate.
+    """The samples of an ensemble: per member its law parameters and growth rate.
 
     Parameters
     ----------
     parameters : dict of str to ndarray
-        Sampled law parameters per name [SI], ``members`` values each.
-    seeds : tuple of tuple of int
-        Rate-field seed of each member.
+        Sampled law parameters per name [SI], one value per member each.
     growth : ndarray
-        Growth rate of each member's traffic [-].
+        Growth rate of each member's traffic [-], one per member.
+    fresh_fields : bool
+        Each member draws its own realisation of the rate field (seeded by its section's
+        seed and its number, `trackdyn.forecast.ensemble.member_tasks`); False: every
+        member has its section's field.
     """
 
     parameters: dict
-    seeds: tuple
     growth: np.ndarray
+    fresh_fields: bool = True
 
     @property
     def count(self) -> int:
         """Members [-]."""
-        return len(self.seeds)
+        return len(self.growth)
 
     def overrides(self, member: int) -> dict[str, float]:
         """The law parameters of ``member`` [SI], for `trackdyn.deterioration.load_law`."""
@@ -198,13 +269,11 @@ class Members:
 
 
 def sample_members(members: int, seed: int, law, *, spreads=None, posterior=None,
-                   growth: Growth | None = None, field_seed: int = 0) -> Members:  # fmt: skip
-    """Draw the members of an ensemble.
+                   growth: Growth | None = None) -> Members:  # fmt: skip
+    """Draw the members of an ensemble, each with a fresh realisation of the rate field.
 
     The random numbers come in a fixed order from one generator seeded with ``seed``: the
-    posterior's samples, then each spread's in the order given, then the growth rates; the
-    rate-field seeds are ``(field_seed, member + 1)`` (member 0 of a run without spread is
-    the deterministic run's field only when the caller says so).
+    posterior's samples, then each spread's in the order given, then the growth rates.
 
     Parameters
     ----------
@@ -220,8 +289,6 @@ def sample_members(members: int, seed: int, law, *, spreads=None, posterior=None
         A calibration's joint posterior; a parameter cannot have both.
     growth : Growth, optional
         Traffic growth; None: every member's rate is 0.
-    field_seed : int
-        Seed of the rate field the members' realisations derive from.
     """
     if not isinstance(members, int) or members < 2:
         raise TrackdynInputError(f"forecast members must be an integer >= 2, got "
@@ -240,5 +307,4 @@ def sample_members(members: int, seed: int, law, *, spreads=None, posterior=None
     for name, spread in spreads.items():
         parameters[name] = spread.sample(float(getattr(law, name)), rng, members)
     rates = np.zeros(members) if growth is None else growth.rates(rng, members)
-    seeds = tuple((int(field_seed), m + 1) for m in range(members))
-    return Members(parameters, seeds, rates)
+    return Members(parameters, rates)

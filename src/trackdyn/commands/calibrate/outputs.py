@@ -14,6 +14,7 @@ from trackdyn.calibration.surveys import d1_change
 from trackdyn.commands.calibrate.plots import plot_calibration, plot_field
 from trackdyn.commands.plots import save
 from trackdyn.deterioration.law_files import law_file_table, law_table_toml, law_units
+from trackdyn.forecast.spread import posterior_toml
 from trackdyn.track.quality import segment_sd
 from trackdyn.track.track import RAILS
 from trackdyn.units import si_factor
@@ -24,10 +25,21 @@ FILES = ("settlement_fitted.toml", "fit.csv", "calibration.csv", "calibration.pn
 FIELD_FILES = ("rate_field.csv", "rate_field.png")
 """Files of a calibration that estimates the rate field."""
 
+POSTERIOR_FILE = "posterior.toml"
+"""The fitted parameters' joint posterior (`trackdyn.forecast.spread.posterior_toml`), for a
+deterioration scenario's ``[forecast] posterior``; written when every fitted parameter's
+variance is finite."""
+
+
+def _sampleable(result: FitResult) -> bool:
+    """The posterior has a finite covariance (every parameter told by the surveys)."""
+    return bool(np.all(np.isfinite(result.posterior.covariance)))
+
 
 def files_of(result: FitResult) -> tuple[str, ...]:
     """The files a calibration with ``result`` writes."""
-    return FILES + (FIELD_FILES if result.field is not None else ())
+    posterior = (POSTERIOR_FILE,) if _sampleable(result) else ()
+    return FILES + (FIELD_FILES if result.field is not None else ()) + posterior
 
 
 def status(result: FitResult) -> str:
@@ -240,4 +252,7 @@ def write_calibration(problem: Calibration, result: FitResult, folder, where: st
         field_table(result).to_csv(folder / FIELD_FILES[0], index=False, float_format="%.6g")
         fig = plot_field(result.field, extent=problem.fitted_extent)
         save(fig, folder / FIELD_FILES[1])
+    if _sampleable(result):
+        text = posterior_toml(result.posterior, problem.spec.settlement.law, f"fitted by {where}")
+        (folder / POSTERIOR_FILE).write_text(text)
     return table

@@ -11,7 +11,7 @@ from __future__ import annotations
 import dataclasses
 
 from trackdyn.commands.staging import Record, output_folder
-from trackdyn.commands.tables import deterioration_table
+from trackdyn.commands.tables import deterioration_table, forecast_table
 from trackdyn.errors import require_workers
 
 
@@ -50,6 +50,23 @@ def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> 
         datasets = run_sections(tasks, workers=workers, scheduler=scheduler, progress=not serial)
         record.headline = {"sections": summary(datasets).to_dict(orient="records")}
         files = write_outputs(datasets, stage)
+        if spec.forecast is not None:
+            table = _forecast(spec, base, tasks, workers, scheduler, stage, files, record)
     title = f"Deterioration, {spec.run.model}: {len(datasets)} section(s)"
     console.print(deterioration_table(summary(datasets), title))
+    if spec.forecast is not None:
+        console.print(forecast_table(table, f"First tamping, {spec.forecast.members} members"))
     console.print(f"wrote {len(files)} files (deterioration_*.nc, CSV tables, figures) to {out}")
+
+
+def _forecast(spec, base, tasks, workers, scheduler, stage, files, record):
+    """Run the scenario's ensemble, write its files into ``stage`` (their names added to
+    ``files``) and its headline into ``record``; return ``forecast.csv``'s table."""
+    from trackdyn.commands.deteriorate.forecast import headline, run_forecast, write_forecast
+
+    forecast = run_forecast(spec, base, tasks, workers=workers, scheduler=scheduler,
+                            progress=True)  # fmt: skip
+    written, table = write_forecast(forecast, [t.section.name for t in tasks], stage)
+    files += written
+    record.headline["forecast_first_tamping_mgt"] = headline(table)
+    return table

@@ -254,3 +254,88 @@ def plot_line(datasets, ax=None, *, title: str = "") -> Figure:
     axis.set_ylabel("accumulated traffic [MGT]")
     fig.suptitle(title or "Straight-line diagram of the line")
     return fig  # laid out by hand, as the straight-line diagram
+
+
+FAN_POINTS = 201
+"""Tonnages the fan chart puts every member's D1 SD on [-]."""
+
+
+def plot_fan(members, ax=None, *, title: str = "") -> Figure:
+    """The fan chart of a section's ensemble: per segment, the D1 SD of the worse rail
+    against tonnage, the members' median and 10-90 % band, the threshold, and each
+    member's tampings as ticks.
+
+    Parameters
+    ----------
+    members : list of xarray.Dataset
+        The members' results (`trackdyn.forecast.ensemble.run_ensemble`) of one section.
+    ax : array of matplotlib Axes, optional
+        One per segment; default: a new figure.
+    title : str
+        Figure title.
+    """
+    segments = members[0].sizes["segment"]
+    fig, axes = panels(ax, segments, 1, figsize=(9, 1.5 * segments + 1.2), sharex=True,
+                       squeeze=False)  # fmt: skip
+    axes = np.asarray(axes).ravel()
+    total = max(float(ds.mgt[-1]) for ds in members)
+    grid = np.linspace(0.0, total, FAN_POINTS)
+    threshold = float(members[0].attrs["option_threshold_sd_mm"])
+    worse = np.array([[np.interp(grid, ds.mgt.values, ds.d1_sd.max("rail").values[:, s],
+                                 right=np.nan) for s in range(segments)]
+                      for ds in members])  # fmt: skip
+    for s, axis in enumerate(axes):
+        low, mid, high = np.nanquantile(worse[:, s], [0.1, 0.5, 0.9], axis=0)
+        axis.fill_between(grid, low, high, color="tab:blue", alpha=0.3, lw=0,
+                          label="10-90 % of members")  # fmt: skip
+        axis.plot(grid, mid, color="tab:blue", lw=1.5, label="median")
+        axis.axhline(threshold, color="k", lw=1, ls="--", label="threshold")
+        for ds in members:
+            tamped = ds.intervention_mgt.values[ds.intervention_segment.values == s]
+            axis.plot(tamped, np.zeros(tamped.size), "|", color="k", ms=8, alpha=0.4)
+        start, end = float(members[0].segment_start[s]), float(members[0].segment_end[s])
+        axis.set_ylabel(f"{start:g}-{end:g} m\nD1 SD [mm]", fontsize=8)
+        axis.set_ylim(bottom=0.0)
+    axes[0].legend(loc="lower left", bbox_to_anchor=(0.0, 1.0), ncol=3, fontsize=8)
+    axes[-1].set_xlabel("accumulated traffic [MGT] (ticks: members' tampings)")
+    axes[-1].set_xlim(0.0, total)
+    fig.suptitle(title or "Forecast")
+    return finished(fig, ax)
+
+
+def plot_reach_probability(table, ax=None, *, title: str = "") -> Figure:
+    """The probability that each segment has had its first tamping, along the chainage
+    against years (or tonnage), one panel per section (``forecast_probability.csv``).
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        ``section``, ``segment_start_m``, ``segment_end_m``, ``by_year`` or ``by_mgt``,
+        ``probability``.
+    ax : array of matplotlib Axes, optional
+        One per section; default: a new figure.
+    title : str
+        Figure title.
+    """
+    by = "by_year" if "by_year" in table else "by_mgt"
+    names = list(dict.fromkeys(table.section))
+    fig, axes = panels(ax, len(names), 1, figsize=(10, 2.2 * len(names) + 1.2), squeeze=False,
+                       layout="constrained")  # fmt: skip
+    axes = np.asarray(axes).ravel()
+    mesh = None
+    for name, axis in zip(names, axes, strict=True):
+        part = table[table.section == name]
+        at = np.unique(part[by].values)
+        starts = np.unique(part.segment_start_m.values)
+        edges_x = np.append(starts, part.segment_end_m.max())
+        step = at[1] - at[0] if at.size > 1 else at[0]
+        edges_y = np.append(at - step, at[-1])
+        grid = part.pivot(index=by, columns="segment_start_m", values="probability")
+        mesh = axis.pcolormesh(edges_x, edges_y, grid.loc[at, starts].values, shading="flat",
+                               cmap="Reds", vmin=0.0, vmax=1.0)  # fmt: skip
+        axis.set_ylabel("by year" if by == "by_year" else "by traffic [MGT]")
+        axis.set_title(name, fontsize=9, loc="left")
+    axes[-1].set_xlabel("distance [m]")
+    fig.colorbar(mesh, ax=list(axes), label="probability of the first tamping by then [-]")
+    fig.suptitle(title or "Probability of reaching the threshold")
+    return fig  # a new figure is laid out by matplotlib's constrained layout

@@ -42,6 +42,16 @@ min_interval_mgt = 5            # and every other trackdyn.deterioration.mainten
 # horizon_years = 30            # with annual_mgt: the horizon instead of [loop] total_mgt
 # annual_mgt = 10
 
+[forecast]                      # omit: one deterministic run; with it, an ensemble too
+members = 32                    # ensemble size
+seed = 0                        # seed of the members' samples
+# posterior = "calibration-out/posterior.toml"  # the law's parameters from a calibration
+parameters = { K_s = { cov = 0.3 } }  # or spreads per parameter (SI): { cov = ... }
+                                # lognormal about the law's value, { min = ..., max = ... }
+                                # uniform; the rate field: a fresh realisation per member
+# annual_growth = 0.02          # with horizon_years: growth of annual_mgt per year [-]
+# annual_growth_sd = 0.01       # its spread between members [-]
+
 [track]                         # omit for the built-in example section
 geometry = "geometry.csv"
 supports = "supports.csv"
@@ -66,6 +76,7 @@ from pydantic import (
     StrictFloat,
     field_serializer,
     field_validator,
+    model_serializer,
     model_validator,
 )
 
@@ -179,12 +190,56 @@ class MaintenanceSpec(MaintenanceOptions):
         return MaintenanceOptions(**fields)
 
 
+class SpreadSpec(Strict):
+    """A parameter's spread in ``[forecast.parameters]``: ``cov`` (lognormal about the law's
+    value) or ``min`` and ``max`` (uniform) [SI]."""
+
+    cov: PositiveFloat | None = None
+    min: float | None = None
+    max: float | None = None
+
+    @model_validator(mode="after")
+    def _one_kind(self):
+        if (self.cov is None) == (self.min is None and self.max is None):
+            raise ValueError("give cov, or min and max")
+        if self.cov is None and (self.min is None or self.max is None):
+            raise ValueError("give min and max together")
+        return self
+
+    def spread(self):
+        """The `trackdyn.forecast.spread.Lognormal` or `Uniform` it stands for."""
+        from trackdyn.forecast.spread import Lognormal, Uniform
+
+        if self.cov is not None:
+            return Lognormal(self.cov)
+        assert self.min is not None and self.max is not None  # the model's check
+        return Uniform(self.min, self.max)
+
+
+MAX_MEMBERS = 1000
+"""Most members of an ensemble: each is a whole deterioration run."""
+
+
+class ForecastSpec(Strict):
+    """``[forecast]``: ``members``, ``seed``, the law's parameters from a calibration's
+    ``posterior`` file and/or ``parameters`` spreads, the traffic's ``annual_growth`` and
+    ``annual_growth_sd`` [-/year] (with a horizon in years)."""
+
+    members: int = Field(32, ge=2, le=MAX_MEMBERS)
+    seed: int = Field(0, ge=0)
+    posterior: Path | None = None
+    parameters: dict[str, SpreadSpec] = Field(default_factory=dict)
+    annual_growth: float = Field(0.0, gt=-0.5, lt=1.0)
+    annual_growth_sd: float = Field(0.0, ge=0.0, lt=1.0)
+
+
 MOVED_TO_RUN = ("model", "delta", "dt_s")
 """Top-level keys of earlier scenario files that now belong in ``[run]``."""
 
 
 class DeteriorationScenario(Strict):
-    """A deterioration scenario: ``[run]`` options and the traffic, law, loop and track."""
+    """A deterioration scenario: ``[run]`` options and the traffic, law, loop and track;
+    optionally maintenance and an ensemble forecast."""
 
     run: RunOptions = RunOptions()
     traffic: list[TrafficSpec] = Field(default_factory=lambda: list(DEFAULT_TRAFFIC))
@@ -192,6 +247,16 @@ class DeteriorationScenario(Strict):
     loop: LoopOptions = LoopOptions()
     track: TrackSectionsSpec = TrackSectionsSpec()
     maintenance: MaintenanceSpec | None = None
+    forecast: ForecastSpec | None = None
+
+    @model_validator(mode="after")
+    def _growth_in_years(self):
+        f, m = self.forecast, self.maintenance
+        growing = f is not None and (f.annual_growth != 0.0 or f.annual_growth_sd != 0.0)
+        if growing and (m is None or m.horizon_years is None):
+            raise ValueError("forecast annual_growth needs the horizon in years: [maintenance] "
+                             "horizon_years and annual_mgt")  # fmt: skip
+        return self
 
     @model_validator(mode="after")
     def _one_horizon(self):
@@ -215,6 +280,14 @@ class DeteriorationScenario(Strict):
             raise ValueError(f"{other[0]!r} is not a key of [loop]; its keys are "
                              f"{', '.join(table)}")  # fmt: skip
         return value
+
+    @model_serializer(mode="wrap")
+    def _without_forecast(self, handler):
+        # a scenario without [forecast] records its options as it did before the table
+        data = handler(self)
+        if self.forecast is None:
+            data.pop("forecast", None)
+        return data
 
     @field_serializer("loop", mode="wrap")
     def _loop_keys(self, loop, handler):

@@ -1,0 +1,152 @@
+"""The ensemble forecast of `trackdyn deteriorate` (a scenario's ``[forecast]`` table): its
+members, tables and figures.
+
+The deterministic run stays what it is without ``[forecast]``; the ensemble runs after it
+(`trackdyn.forecast.ensemble.run_ensemble`) and adds ``forecast.csv`` (per section, segment
+and quantity the members' p10, p50, p90, mean), ``forecast_probability.csv`` (the share of
+members whose segment has had its first tamping by each year, or each 10 MGT), a fan chart
+per section and the probability diagram.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from trackdyn.forecast.ensemble import run_ensemble
+from trackdyn.forecast.spread import Growth, Members, read_posterior, sample_members
+from trackdyn.forecast.summary import first_tamping, forecast_table, reach_probability
+
+PROBABILITY_EVERY_MGT = 10.0
+"""Tonnage between the probabilities of ``forecast_probability.csv`` without a horizon in
+years [MGT]; a horizon shorter than twice this gets tenths of itself."""
+
+
+@dataclass(frozen=True)
+class Forecast:
+    """An ensemble's results.
+
+    Parameters
+    ----------
+    members : Members
+        The members' samples.
+    ensembles : list of list of xarray.Dataset
+        Per section, its members' results.
+    growth : Growth or None
+        The traffic's growth, with a horizon in years.
+    horizon_years : float or None
+        The horizon in years, if given so [year].
+    """
+
+    members: Members
+    ensembles: list
+    growth: Growth | None
+    horizon_years: float | None
+
+    def years(self):
+        """Per member, the year in which a tonnage is reached (None without years)."""
+        if self.growth is None:
+            return None
+        g = self.growth
+        return [lambda mgt, rate=rate: g.year_of(mgt, rate) for rate in self.members.growth]
+
+
+def run_forecast(spec, base, tasks, *, workers=None, scheduler=None, progress=False):
+    """Sample the members of a scenario's ``[forecast]`` and run them on every section.
+
+    Parameters
+    ----------
+    spec : DeteriorationScenario
+        The scenario, with a ``forecast`` table.
+    base : Path
+        Folder its relative paths start from.
+    tasks : list of SectionTask
+        The sections' deterministic tasks.
+    workers, scheduler, progress
+        As `trackdyn.deterioration.runs.run_sections`.
+    """
+    f, m = spec.forecast, spec.maintenance
+    posterior = None if f.posterior is None else read_posterior(base / f.posterior,
+                                                                spec.settlement.law)  # fmt: skip
+    in_years = m is not None and m.horizon_years is not None
+    growth = Growth(m.annual_mgt, f.annual_growth, f.annual_growth_sd) if in_years else None
+    spreads = {name: s.spread() for name, s in f.parameters.items()}
+    members = sample_members(f.members, f.seed, tasks[0].law, spreads=spreads,
+                             posterior=posterior, growth=growth)  # fmt: skip
+    years = m.horizon_years if in_years else None
+    ensembles = run_ensemble(tasks, members, growth=growth, horizon_years=years,
+                             workers=workers, scheduler=scheduler, progress=progress)  # fmt: skip
+    return Forecast(members, ensembles, growth, years)
+
+
+def tables(forecast: Forecast, names) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """``forecast.csv`` and ``forecast_probability.csv`` of all sections.
+
+    Parameters
+    ----------
+    forecast : Forecast
+        The ensemble's results.
+    names : list of str
+        The sections' names, in the order of ``forecast.ensembles``.
+    """
+    quantiles, probabilities = [], []
+    years = forecast.years()
+    for name, members in zip(names, forecast.ensembles, strict=True):
+        table = forecast_table(members, years)
+        table.insert(0, "section", name)
+        quantiles.append(table)
+        first = np.array([first_tamping(ds) for ds in members])
+        if years is not None and forecast.horizon_years is not None:
+            first = np.array([y(f) for y, f in zip(years, first, strict=True)])
+            at, column = np.arange(1.0, np.ceil(forecast.horizon_years) + 1.0), "by_year"
+        else:
+            total = max(float(ds.mgt[-1]) for ds in members)
+            step = PROBABILITY_EVERY_MGT if total >= 2 * PROBABILITY_EVERY_MGT else total / 10
+            at = np.arange(step, total + 1e-9 * total, step)
+            column = "by_mgt"
+        p = reach_probability(first, at)
+        ds = members[0]
+        for s in range(p.shape[1]):
+            probabilities.append(pd.DataFrame({
+                "section": name,
+                "segment_start_m": float(ds.segment_start[s]),
+                "segment_end_m": float(ds.segment_end[s]),
+                column: at,
+                "probability": p[:, s],
+            }))  # fmt: skip
+    return pd.concat(quantiles, ignore_index=True), pd.concat(probabilities, ignore_index=True)
+
+
+def headline(table: pd.DataFrame) -> list[dict]:
+    """The first tamping of every segment as p10, p50, p90 [MGT], for ``summary.json``."""
+    first = table[table.quantity == "first_tamping_mgt"]
+    keep = ["section", "segment_start_m", "segment_end_m", "p10", "p50", "p90", "members"]
+    return first[keep].to_dict(orient="records")
+
+
+def write_forecast(forecast: Forecast, names, folder) -> tuple[list[str], pd.DataFrame]:
+    """Write the forecast's tables and figures into ``folder``.
+
+    Returns
+    -------
+    files : list of str
+        The names written: ``forecast.csv``, ``forecast_probability.csv``,
+        ``<section>_forecast_fan.png`` per section and ``forecast_probability.png``.
+    table : pandas.DataFrame
+        ``forecast.csv``'s table.
+    """
+    from trackdyn.commands.deteriorate.plots import plot_fan, plot_reach_probability
+    from trackdyn.commands.plots import save
+
+    table, probability = tables(forecast, names)
+    table.to_csv(folder / "forecast.csv", index=False, float_format="%.6g")
+    probability.to_csv(folder / "forecast_probability.csv", index=False, float_format="%.6g")
+    files = ["forecast.csv", "forecast_probability.csv"]
+    for name, members in zip(names, forecast.ensembles, strict=True):
+        title = f"{name}: {len(members)} members"
+        save(plot_fan(members, title=title), folder / f"{name}_forecast_fan.png")
+        files.append(f"{name}_forecast_fan.png")
+    save(plot_reach_probability(probability), folder / "forecast_probability.png")
+    return [*files, "forecast_probability.png"], table
