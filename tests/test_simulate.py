@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from trackdyn.errors import TrackdynInputError
+from trackdyn.errors import Failure, TrackdynInputError
 from trackdyn.options import RunOptions
 from trackdyn.simulation import simulate, simulate_batch
 from trackdyn.vehicle.parameters import load_vehicle
@@ -59,7 +59,7 @@ def test_batch_gives_each_run_its_own_results(lin):
         RunOptions(speed_kmh=60.0),
     ]
     batch = simulate_batch(vehicles[:3], lin, options[:3])
-    assert isinstance(batch[2], TrackdynInputError)
+    assert isinstance(batch[2], Failure)
     for v, o, ds in zip(vehicles[:2], options[:2], batch[:2], strict=True):
         xr.testing.assert_identical(ds, simulate(v, lin, o))
     failing = simulate_batch(vehicles[3:], lin, options[3:], newton_max_iter=1)

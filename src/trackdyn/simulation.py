@@ -19,7 +19,7 @@ import numba
 import numpy as np
 import xarray as xr
 
-from trackdyn.errors import TrackdynInputError
+from trackdyn.errors import Failure, TrackdynInputError
 from trackdyn.limits import MAX_STEPS
 from trackdyn.options import RunOptions
 from trackdyn.progress import progress_bar
@@ -160,7 +160,7 @@ def run_batch(vehicles: list[Vehicle], tracks, options: list[RunOptions], *,
     Returns
     -------
     list
-        Per run, a `Run` or a `TrackdynInputError`.
+        Per run, a `Run` or the `trackdyn.errors.Failure` it gave.
     """
     if not isinstance(tracks, list | tuple):
         tracks = [tracks] * len(vehicles)
@@ -199,7 +199,7 @@ def run_batch(vehicles: list[Vehicle], tracks, options: list[RunOptions], *,
                            keep=keep)  # fmt: skip
             for i, out in zip(index, solved, strict=True):
                 results[i] = out if isinstance(out, Exception) else Run(made[i], out)
-    return results
+    return [Failure.of(r) if isinstance(r, Exception) else r for r in results]
 
 
 def simulate_batch(
@@ -216,7 +216,7 @@ def simulate_batch(
     per block of steps, the runs side by side in the vector lanes,
     `trackdyn.solver.central.advance_lanes`); each run's results are those it gives alone,
     to the bit. A run that cannot be made or fails (bad time step, Newton) comes
-    back as its `TrackdynInputError` and does not stop the others.
+    back as its `trackdyn.errors.Failure` and does not stop the others.
 
     Parameters
     ----------
@@ -234,11 +234,11 @@ def simulate_batch(
     Returns
     -------
     list
-        Per run, an `xarray.Dataset` (see `simulate`) or a `TrackdynInputError`.
+        Per run, an `xarray.Dataset` (see `simulate`) or a `trackdyn.errors.Failure`.
     """
     runs = run_batch(vehicles, tracks, options, progress=progress,
                      newton_max_iter=newton_max_iter)  # fmt: skip
-    return [r if isinstance(r, Exception) else _dataset(r, v, o)
+    return [r if isinstance(r, Failure) else _dataset(r, v, o)
             for r, v, o in zip(runs, vehicles, options, strict=True)]  # fmt: skip
 
 
@@ -327,6 +327,6 @@ def simulate(
     (result,) = simulate_batch(
         [vehicle], [track], [o], progress=progress, newton_max_iter=newton_max_iter
     )
-    if isinstance(result, Exception):
-        raise result
+    if isinstance(result, Failure):
+        raise result.error()
     return result

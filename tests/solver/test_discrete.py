@@ -8,7 +8,7 @@ from scipy.integrate import solve_ivp
 from trackdyn import load_vehicle
 from trackdyn.beam.elements import element_stiffness, hermite
 from trackdyn.beam.static import linear_supports, solve_beam
-from trackdyn.errors import TrackdynInputError
+from trackdyn.errors import Failure, TrackdynInputError
 from trackdyn.options import RunOptions
 from trackdyn.simulation import run_batch
 from trackdyn.solver.discrete import axle_table, first_window, start, vehicle_model
@@ -34,8 +34,8 @@ def small_track(n=60, stiffness=100e6, seed=None, dip=0.0):
 
 def run(vehicle, track, **options):
     (r,) = run_batch([vehicle], [track], [RunOptions(track="discrete", **options)])
-    if isinstance(r, Exception):
-        raise r
+    if isinstance(r, Failure):
+        raise r.error()
     return r
 
 

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from trackdyn import simulation
-from trackdyn.errors import TrackdynInputError
+from trackdyn.errors import Failure
 from trackdyn.options import RunOptions
 from trackdyn.simulation import run_batch
 from trackdyn.solver import central
@@ -35,8 +35,8 @@ def assert_alone(batch, vehicles, tracks, options, newton_max_iter=50):
     the same error)."""
     for r, v, trk, o in zip(batch, vehicles, tracks, options, strict=True):
         (alone,) = run_batch([v], [trk], [o], newton_max_iter=newton_max_iter)
-        if isinstance(alone, Exception):
-            assert isinstance(r, TrackdynInputError)
+        if isinstance(alone, Failure):
+            assert isinstance(r, Failure)
             assert str(r) == str(alone)
             continue
         assert alone.out.keys() == r.out.keys()
@@ -60,7 +60,7 @@ def varied(model, n, **options):
 def test_lanes_give_each_run_alone(lin, model):
     vehicles, options = varied(model, central.LANES + 1)
     batch = run_batch(vehicles, lin, options)
-    assert not any(isinstance(r, Exception) for r in batch)
+    assert not any(isinstance(r, Failure) for r in batch)
     assert_alone(batch, vehicles, [lin] * len(batch), options)
 
 
@@ -93,7 +93,7 @@ def test_a_group_with_idle_lanes(lin, model, runs):
     # still what they are alone, and no idle lane writes into a run's outputs
     vehicles, options = varied(model, runs)
     batch = run_batch(vehicles, lin, options)
-    assert not any(isinstance(r, Exception) for r in batch)
+    assert not any(isinstance(r, Failure) for r in batch)
     assert_alone(batch, vehicles, [lin] * len(batch), options)
 
 
@@ -116,7 +116,7 @@ def test_a_lane_whose_newton_fails_stops_alone(lin):
     vehicles = [V if i in (1, 4) else STICKY for i in range(central.LANES)]
     options = [RunOptions(speed_kmh=50.0 + 5.0 * i, store_every=2) for i in range(central.LANES)]
     batch = run_batch(vehicles, lin, options, newton_max_iter=1)
-    failed = [isinstance(r, TrackdynInputError) for r in batch]
+    failed = [isinstance(r, Failure) for r in batch]
     assert failed[1] and failed[4] and not all(failed)
     assert "did not converge" in str(batch[1])
     assert_alone(batch, vehicles, [lin] * len(batch), options, newton_max_iter=1)
@@ -138,7 +138,7 @@ def test_a_non_finite_lane_stops_alone(lin, monkeypatch):
     tracks = [bad if i == 1 else lin for i in range(central.LANES)]
     batch = run_batch(vehicles, tracks, options)
     for i, r in enumerate(batch):
-        assert isinstance(r, TrackdynInputError) == (i == 1)
+        assert isinstance(r, Failure) == (i == 1)
     assert "non-finite displacements" in str(batch[1])
     assert_alone(batch, vehicles, tracks, options)
     # found the same way when the displacements are not stored (in the lanes and alone)

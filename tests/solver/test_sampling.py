@@ -10,6 +10,7 @@ blocks are then not sampled in turn, and sampled but not used ahead).
 import numpy as np
 import pytest
 
+from trackdyn.errors import Failure
 from trackdyn.options import RunOptions
 from trackdyn.simulation import run_batch
 from trackdyn.solver import central
@@ -36,10 +37,10 @@ def solved(lin, threads, monkeypatch):
 
 def test_sampling_in_turn_gives_what_sampling_ahead_gives(lin, small_blocks, monkeypatch):
     ahead, in_turn = solved(lin, 2, monkeypatch), solved(lin, 1, monkeypatch)
-    failed = [isinstance(r, Exception) for r in ahead]
+    failed = [isinstance(r, Failure) for r in ahead]
     assert failed[1] and failed[central.LANES] and not all(failed)
     for a, b in zip(ahead, in_turn, strict=True):
-        if isinstance(a, Exception):
+        if isinstance(a, Failure):
             assert str(a) == str(b)
             continue
         for name, values in a.out.items():
