@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from trackdyn.errors import TrackdynInputError, require_positive, shown
+from trackdyn.io import read_toml
 
 
 @dataclass(frozen=True)
@@ -166,8 +167,6 @@ def read_posterior(path, law: str) -> Posterior:
     law : str
         The scenario's settlement law.
     """
-    from trackdyn.io import read_toml
-
     table = read_toml(path)
     keys = {"law", "parameters", "log", "mean", "covariance"}
     if set(table) != keys:

@@ -46,26 +46,30 @@ def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> 
         tasks = [dataclasses.replace(t, progress=True) for t in tasks]
     title = f"trackdyn deteriorate: {spec.run.model}, {len(tasks)} section(s)"
     record = Record(title, {"scenario": scenario}, spec.model_dump(mode="json"))
+    plan = None
+    if spec.forecast is not None:  # sampled (and refused if wrong) before anything runs
+        from trackdyn.commands.deteriorate.forecast import plan_forecast
+
+        plan = plan_forecast(spec, base, tasks[0].law)
     with output_folder(out, "deteriorate", overwrite, record) as stage:
         datasets = run_sections(tasks, workers=workers, scheduler=scheduler, progress=not serial)
         record.headline = {"sections": summary(datasets).to_dict(orient="records")}
         files = write_outputs(datasets, stage)
-        if spec.forecast is not None:
-            table = _forecast(spec, base, tasks, workers, scheduler, stage, files, record)
+        if plan is not None:
+            table = _forecast(plan, tasks, workers, scheduler, stage, files, record)
     title = f"Deterioration, {spec.run.model}: {len(datasets)} section(s)"
     console.print(deterioration_table(summary(datasets), title))
-    if spec.forecast is not None:
-        console.print(forecast_table(table, f"First tamping, {spec.forecast.members} members"))
+    if plan is not None:
+        console.print(forecast_table(table, f"First tamping, {plan.members.count} members"))
     console.print(f"wrote {len(files)} files (deterioration_*.nc, CSV tables, figures) to {out}")
 
 
-def _forecast(spec, base, tasks, workers, scheduler, stage, files, record):
-    """Run the scenario's ensemble, write its files into ``stage`` (their names added to
+def _forecast(plan, tasks, workers, scheduler, stage, files, record):
+    """Run the planned ensemble, write its files into ``stage`` (their names added to
     ``files``) and its headline into ``record``; return ``forecast.csv``'s table."""
     from trackdyn.commands.deteriorate.forecast import headline, run_forecast, write_forecast
 
-    forecast = run_forecast(spec, base, tasks, workers=workers, scheduler=scheduler,
-                            progress=True)  # fmt: skip
+    forecast = run_forecast(plan, tasks, workers=workers, scheduler=scheduler, progress=True)
     written, table = write_forecast(forecast, [t.section.name for t in tasks], stage)
     files += written
     record.headline["forecast_first_tamping_mgt"] = headline(table)

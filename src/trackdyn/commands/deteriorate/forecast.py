@@ -53,8 +53,18 @@ class Forecast:
         return [lambda mgt, rate=rate: g.year_of(mgt, rate) for rate in self.members.growth]
 
 
-def run_forecast(spec, base, tasks, *, workers=None, scheduler=None, progress=False):
-    """Sample the members of a scenario's ``[forecast]`` and run them on every section.
+@dataclass(frozen=True)
+class Plan:
+    """A scenario's ensemble, sampled before anything runs (so that a bad ``[forecast]``
+    table or posterior file is refused before the deterministic run)."""
+
+    members: Members
+    growth: Growth | None
+    horizon_years: float | None
+
+
+def plan_forecast(spec, base, law) -> Plan:
+    """Sample the members of a scenario's ``[forecast]``.
 
     Parameters
     ----------
@@ -62,10 +72,8 @@ def run_forecast(spec, base, tasks, *, workers=None, scheduler=None, progress=Fa
         The scenario, with a ``forecast`` table.
     base : Path
         Folder its relative paths start from.
-    tasks : list of SectionTask
-        The sections' deterministic tasks.
-    workers, scheduler, progress
-        As `trackdyn.deterioration.runs.run_sections`.
+    law : LawParameters
+        The sections' settlement law (its values are the spreads' medians).
     """
     f, m = spec.forecast, spec.maintenance
     posterior = None if f.posterior is None else read_posterior(base / f.posterior,
@@ -73,12 +81,27 @@ def run_forecast(spec, base, tasks, *, workers=None, scheduler=None, progress=Fa
     in_years = m is not None and m.horizon_years is not None
     growth = Growth(m.annual_mgt, f.annual_growth, f.annual_growth_sd) if in_years else None
     spreads = {name: s.spread() for name, s in f.parameters.items()}
-    members = sample_members(f.members, f.seed, tasks[0].law, spreads=spreads,
-                             posterior=posterior, growth=growth)  # fmt: skip
-    years = m.horizon_years if in_years else None
-    ensembles = run_ensemble(tasks, members, growth=growth, horizon_years=years,
-                             workers=workers, scheduler=scheduler, progress=progress)  # fmt: skip
-    return Forecast(members, ensembles, growth, years)
+    members = sample_members(f.members, f.seed, law, spreads=spreads, posterior=posterior,
+                             growth=growth)  # fmt: skip
+    return Plan(members, growth, m.horizon_years if in_years else None)
+
+
+def run_forecast(plan: Plan, tasks, *, workers=None, scheduler=None, progress=False):
+    """Run the planned members on every section.
+
+    Parameters
+    ----------
+    plan : Plan
+        The members (`plan_forecast`).
+    tasks : list of SectionTask
+        The sections' deterministic tasks.
+    workers, scheduler, progress
+        As `trackdyn.deterioration.runs.run_sections`.
+    """
+    ensembles = run_ensemble(tasks, plan.members, growth=plan.growth,
+                             horizon_years=plan.horizon_years, workers=workers,
+                             scheduler=scheduler, progress=progress)  # fmt: skip
+    return Forecast(plan.members, ensembles, plan.growth, plan.horizon_years)
 
 
 def tables(forecast: Forecast, names) -> tuple[pd.DataFrame, pd.DataFrame]:
