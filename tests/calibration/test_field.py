@@ -88,6 +88,27 @@ def test_posterior_equals_the_direct_gaussian_solve():
     assert np.sum(ev.misfit**2) + np.sum(ev.penalty**2) == pytest.approx(quad, rel=1e-8)
 
 
+def test_posterior_draws_have_the_direct_gaussian_covariance():
+    position, lin, _, c = _problem()
+    prior = Prior(position, LENGTH)
+    ev = evidence(lin, prior)
+    field = estimate(lin, prior, position, np.ones(N, bool), ev.lam, ev.sigma2)
+    # the root against the direct posterior covariance (closed form, as the test above)
+    tau2, a = ev.lam * ev.sigma2, lin.a
+    cov_y = ev.sigma2 * np.eye(lin.y.size) + tau2 * a @ c @ a.T
+    cov = tau2 * c - tau2**2 * c @ a.T @ np.linalg.solve(cov_y, a @ c)
+    root = field.posterior_root
+    np.testing.assert_allclose(root @ root.T, cov, atol=1e-6 * np.abs(cov).max())
+    # 4000 draws: their ln factor's mean and SD per rail seat within sampling error of the
+    # estimate and its standard error (SE of a mean sd/√4000, of an SD about sd/√8000)
+    u = np.log(field.draws(4000, seed=1))
+    sd = field.standard_error / field.factor
+    assert np.all(np.abs(u.mean(axis=0) - field.log_factor) < 5 * sd / np.sqrt(4000))
+    np.testing.assert_allclose(u.std(axis=0), sd, rtol=5 / np.sqrt(8000))
+    # the same seed, the same draws (a forecast is reproducible)
+    np.testing.assert_array_equal(field.draws(3, seed=7), field.draws(3, seed=7))
+
+
 def test_estimate_finds_the_field_and_its_strength():
     position, lin, u, _ = _problem()
     prior = Prior(position, LENGTH)

@@ -99,9 +99,13 @@ def test_forecast_writes_its_tables_and_keeps_the_deterministic_run(folder, tmp_
         ("[forecast]\nparameters = { K_s = { cov = 0.2, min = 1 } }\n", "give cov, or min"),
         ("[forecast]\nannual_growth = 0.02\n", "needs the horizon in years"),
         ('[forecast]\nposterior = "missing.toml"\n', "missing.toml"),
+        ('[forecast]\nrate_field_draws = "draws.csv"\n', "draws.csv (draw 1): no left-rail row"),
     ],
 )
 def test_a_wrong_forecast_table_is_refused_in_one_line(folder, tmp_path, table, message):
+    # draws of a calibration of another section: a field that does not cover this one
+    (tmp_path / "draws.csv").write_text("distance_m,rail,draw,factor\n500,left,1,1.1\n"
+                                        "500,right,1,0.9\n")  # fmt: skip
     text = SCENARIO.replace("geometry.csv", str(folder / "geometry.csv"))
     (tmp_path / "bad.toml").write_text(text.replace("supports.csv", str(folder / "supports.csv"))
                                        + table)  # fmt: skip

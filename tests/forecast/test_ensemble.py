@@ -54,3 +54,16 @@ def test_members_take_their_samples_and_horizons(task):
         rate = np.log1p(members.growth[m])
         assert t.options.total_mgt == pytest.approx(10.0 * np.expm1(0.5 * rate) / rate)
         assert t.law.load_exponent == task.law.load_exponent  # not varied
+
+
+def test_members_run_on_the_drawn_fields_in_turn(task):
+    n = 1 + int(round(100.0 / 0.6))  # sleepers of the fixture's section: check the shape
+    trk_n = len(task.options.rate_factor or ()) or None
+    assert trk_n is None  # the fixture's deterministic task draws its own field
+    rng = np.random.default_rng(0)
+    fields = np.exp(0.3 * rng.standard_normal((2, 2, n)))  # two draws
+    members = sample_members(3, 5, task.law, fields=fields)
+    tasks = member_tasks(task, members)
+    for m, t in enumerate(tasks):  # member m on draw m modulo 2, its seed not changed
+        np.testing.assert_array_equal(np.array(t.options.rate_factor), fields[m % 2])
+        assert t.options.seed == task.options.seed

@@ -20,7 +20,11 @@ that the mean of ``u`` over all rail seats is zero: a common factor is the law's
 deterioration model's random field has mean factor 1 instead, ``exp(σ²/2)`` above a
 field with mean ``ln factor`` 0). The strength ``λ = τ² / σ²`` is the one of largest
 marginal likelihood of the surveys (type-II maximum likelihood, σ² profiled out; MacKay
-1992), found on the eigenvalues of ``A C Aᵀ``, with ``τ`` at most `MAX_PRIOR_SD`; the
+1992), found on the eigenvalues of ``A C Aᵀ``, with ``τ`` at most the prior's bound
+(`Prior`, ``fit.rate_cov_max``: D1-band surveys see the field and K_s only as their
+product's pattern, so that without the bound the strength runs up the ridge: on surveys
+made with a field of cov 0.3 it chose 0.95 for ``τ`` with K_s a quarter of the truth,
+see `benchmarks/forecast.py`); the
 estimate is the posterior mean, its standard error the posterior standard deviation (of
 ``u``, and ``f`` times it for the factor, delta method). Rail seats that no compared point
 sees keep the prior: factor about 1, standard error about ``τ``.
@@ -45,6 +49,7 @@ from scipy.optimize import brentq, minimize_scalar
 from trackdyn.beam.elements import stiffness_band
 from trackdyn.calibration.problem import compare
 from trackdyn.deterioration.ballast import MAX_RATE_COV, RAIL_CORRELATION
+from trackdyn.errors import TrackdynInputError
 from trackdyn.track.quality import longitudinal_level
 from trackdyn.track.track import RAILS
 
@@ -52,9 +57,13 @@ JITTER = 1e-9
 """Added to the eigenvalues' floor of the prior correlation [-] (a Gaussian correlation
 matrix is numerically singular)."""
 
-MAX_PRIOR_SD = float(np.sqrt(np.log1p(MAX_RATE_COV**2)))
-"""Largest standard deviation of ``ln factor`` the strength may reach [-]: that of the
-largest coefficient of variation the deterioration model accepts."""
+DEFAULT_RATE_COV_MAX = 0.5
+"""Default largest coefficient of variation of the estimated settlement-rate factor [-]
+(``fit.rate_cov_max``): illustrative, an engineering bound, not a published value (the
+deterioration model's default field has 0.3). With it, a forecast from a calibration of
+surveys the model made with a field of cov 0.3 held the true first tamping within its
+10-90 % interval for 11 of 12 segment-truths (`benchmarks/forecast.py`, 6 truths); with
+the bound at the model's largest, 3, for 2 of 4."""
 
 LOG_STRENGTH_RANGE = (-12.0, 8.0)
 """Search range of ``ln λ`` of the marginal likelihood, ``λ`` in [1/mm²]: from a field of
@@ -79,6 +88,9 @@ class FieldEstimate:
         ``τ``, the standard deviation of ``ln factor`` the data chose [-].
     noise_mm : float
         ``σ``, the residual noise the data chose [mm].
+    posterior_root : ndarray
+        (2 rails x sleepers, k) ``S`` with ``S Sᵀ`` the posterior covariance of ``ln
+        factor`` [-] (`draws`).
     """
 
     position: np.ndarray
@@ -88,6 +100,24 @@ class FieldEstimate:
     observed: np.ndarray
     prior_sd: float
     noise_mm: float
+    posterior_root: np.ndarray
+
+    def draws(self, count: int, seed: int) -> np.ndarray:
+        """``count`` fields drawn from the posterior, (count, 2 rails, sleepers) factor [-]:
+        ``exp(û + S ξ)``, ``ξ`` standard normal. Each has the correlation along the
+        track the prior gives where the surveys say little, and follows the estimate
+        where they say much (a conditional simulation of the field).
+
+        Parameters
+        ----------
+        count : int
+            Fields to draw [-].
+        seed : int
+            Seed of the draws.
+        """
+        xi = np.random.default_rng(seed).standard_normal((self.posterior_root.shape[1], count))
+        u = self.log_factor.reshape(-1, 1) + self.posterior_root @ xi
+        return np.exp(u.T.reshape(count, *self.log_factor.shape))
 
     @property
     def cov(self) -> float:
@@ -213,9 +243,16 @@ class Prior:
         Sleeper positions [m].
     length : float
         Correlation length [m].
+    max_cov : float
+        Largest coefficient of variation of the factor the strength may give [-]: ``τ`` is
+        at most ``max_sd = √ln(1 + max_cov²)``.
     """
 
-    def __init__(self, position, length: float):
+    def __init__(self, position, length: float, max_cov: float = DEFAULT_RATE_COV_MAX):
+        if not 0 < max_cov <= MAX_RATE_COV:
+            raise TrackdynInputError(f"fit.rate_cov_max must be in (0, {MAX_RATE_COV:g}], got "
+                                     f"{max_cov:g}")  # fmt: skip
+        self.max_sd = float(np.sqrt(np.log1p(max_cov**2)))
         self.c = prior_correlation(position, length)
         eig, vec = np.linalg.eigh(self.c)
         keep = eig > JITTER * eig.max()
@@ -257,7 +294,7 @@ class Evidence:
 def evidence(lin: Linearised, prior: Prior) -> Evidence:
     """`Evidence` of the linearised surveys: ``λ`` and ``σ²`` of largest marginal
     likelihood (``σ²`` profiled out, ``λ`` by bounded scalar search on ``ln λ``), with
-    ``τ`` at most `MAX_PRIOR_SD`."""
+    ``τ`` at most the prior's ``max_sd``."""
     g = lin.a @ prior.root
     eig, v = np.linalg.eigh(g @ g.T)
     eig = np.maximum(eig, 0.0)
@@ -272,7 +309,7 @@ def evidence(lin: Linearised, prior: Prior) -> Evidence:
 
     def excess(log_lam):  # ln τ² - ln τ_max², τ² = λ σ²(λ) rising with λ
         s = 1.0 + np.exp(log_lam) * eig
-        return log_lam + np.log(np.sum(yv**2 / s) / m) - 2 * np.log(MAX_PRIOR_SD)
+        return log_lam + np.log(np.sum(yv**2 / s) / m) - 2 * np.log(prior.max_sd)
 
     if excess(log_lam) > 0:
         log_lam = brentq(excess, LOG_STRENGTH_RANGE[0], log_lam)
@@ -317,7 +354,28 @@ def estimate(lin: Linearised, prior: Prior, position, observed, lam: float,
     u, se = u.reshape(2, n), np.sqrt(np.maximum(var, 0.0)).reshape(2, n)
     factor = np.exp(u)
     return FieldEstimate(position, factor, factor * se, u, observed,
-                         float(np.sqrt(sigma2 * lam)), float(np.sqrt(sigma2)))  # fmt: skip
+                         float(np.sqrt(sigma2 * lam)), float(np.sqrt(sigma2)),
+                         posterior_root(g, prior, lam, sigma2))  # fmt: skip
+
+
+def posterior_root(g, prior: Prior, lam: float, sigma2: float) -> np.ndarray:
+    """``S`` with ``S Sᵀ`` the posterior covariance of ``ln factor``, (2n, k) [-].
+
+    In the prior's coordinates ``u = R w``, ``w ~ N(0, λσ² I)``, the posterior covariance
+    of ``w`` is ``λσ² (I + λ GᵀG)⁻¹`` (Rasmussen & Williams 2006, eq. 2.8); with ``GᵀG =
+    V E Vᵀ``, ``S = √(λσ²) R V (I + λE)^(-1/2)``.
+
+    Parameters
+    ----------
+    g : ndarray
+        ``G = A R`` (residual points, k) [mm].
+    prior : Prior
+        The prior correlation and its root ``R``.
+    lam, sigma2 : float
+        ``λ`` [1/mm²] and ``σ²`` [mm²].
+    """
+    e, v = np.linalg.eigh(g.T @ g)
+    return np.sqrt(lam * sigma2) * (prior.root @ (v / np.sqrt(1.0 + lam * np.maximum(e, 0.0))))
 
 
 def joint_information(j, g, lam: float, sigma2: float) -> np.ndarray:

@@ -351,7 +351,8 @@ def _field_parts(problem: Calibration):
     band = [band_matrix(problem.x, problem.position,
                         rail_transfer(problem.position, k, problem.EI))
             for k in problem.stiffness]  # fmt: skip
-    return band, Prior(problem.position, problem.spec.settlement.rate_correlation_length_m)
+    return band, Prior(problem.position, problem.spec.settlement.rate_correlation_length_m,
+                       problem.spec.fit.rate_cov_max)
 
 
 def _joint_covariance(obj: Objective, theta, field: FieldEstimate, parts) -> np.ndarray:

@@ -139,7 +139,31 @@ def read_rate_field(path, position) -> np.ndarray:
     position : ndarray
         Sleeper positions of the track [m].
     """
-    frame = read_table(path, RATE_FIELD_COLUMNS)
+    return _rate_field_of(read_table(path, RATE_FIELD_COLUMNS), position, path)
+
+
+def read_field_draws(path, position) -> np.ndarray:
+    """Rate fields drawn from a calibration's posterior, (draws, 2, n) [-].
+
+    The file (CSV, ``distance_m,rail,draw,factor``, one row per draw, rail and sleeper, as
+    `trackdyn calibrate` writes ``rate_field_draws.csv``) holds for each draw what
+    `read_rate_field` reads; draws in the order of their first row.
+
+    Parameters
+    ----------
+    path : path
+        The CSV file.
+    position : ndarray
+        Sleeper positions of the track [m].
+    """
+    frame = read_table(path, (*RATE_FIELD_COLUMNS, "draw"))
+    draws = frame.draw.str.strip()
+    return np.array([_rate_field_of(frame[draws == d], position, f"{path} (draw {d})")
+                     for d in pd.unique(draws)])  # fmt: skip
+
+
+def _rate_field_of(frame, position, path) -> np.ndarray:
+    """`read_rate_field` of the rows ``frame`` read from ``path``."""
     distance = pd.to_numeric(frame.distance_m, errors="coerce").to_numpy()
     factor = pd.to_numeric(frame.factor, errors="coerce").to_numpy()
     rail = frame.rail.str.strip().to_numpy()
@@ -148,9 +172,9 @@ def read_rate_field(path, position) -> np.ndarray:
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
         raise TrackdynInputError(
-            f"{path}: line {i + 2}: needs distance_m a number, rail left or right and factor "
-            f"in (0, {MAX_FACTOR:g}]; got {frame.distance_m[i]!r}, {frame.rail[i]!r}, "
-            f"{frame.factor[i]!r}"
+            f"{path}: line {frame.index[i] + 2}: needs distance_m a number, rail left or "
+            f"right and factor in (0, {MAX_FACTOR:g}]; got {frame.distance_m.iloc[i]!r}, "
+            f"{frame.rail.iloc[i]!r}, {frame.factor.iloc[i]!r}"
         )
     position = np.asarray(position, dtype=float)
     tolerance = MATCH_TOLERANCE * float(np.median(np.diff(position)))
@@ -161,8 +185,9 @@ def read_rate_field(path, position) -> np.ndarray:
         x, f = x[order], f[order]
         if x.size == 0:
             raise TrackdynInputError(f"{path}: no rows for the {name} rail")
-        j = np.clip(np.searchsorted(x, position), 1, max(x.size - 1, 1))
-        j = np.where(np.abs(x[j - 1] - position) <= np.abs(x[j] - position), j - 1, j)
+        after = np.clip(np.searchsorted(x, position), 0, x.size - 1)  # the nearest row:
+        before = np.maximum(after - 1, 0)  # the one at or after, or the one before
+        j = np.where(np.abs(x[before] - position) <= np.abs(x[after] - position), before, after)
         far = np.abs(x[j] - position) > tolerance
         if far.any():
             k = int(np.flatnonzero(far)[0])

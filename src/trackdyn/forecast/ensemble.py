@@ -36,14 +36,17 @@ def member_tasks(task: SectionTask, members: Members, growth: Growth | None = No
     Returns
     -------
     list of SectionTask
-        One per member, named ``<section> member <m>``; a calibrated rate field given in
-        the options (``rate_factor``) stays as given, otherwise each member draws its own
-        (seed: the section's followed by ``m + 1``).
+        One per member, named ``<section> member <m>``: on its drawn field
+        (`Members.field`) where the members have drawn fields; else a calibrated rate
+        field given in the options (``rate_factor``) stays as given, otherwise each member
+        draws its own (seed: the section's followed by ``m + 1``).
     """
     out = []
     for m in range(members.count):
         update: dict = {}
-        if members.fresh_fields and task.options.rate_factor is None:
+        if members.fields is not None:
+            update["rate_factor"] = members.field(m)
+        elif members.fresh_fields and task.options.rate_factor is None:
             update["seed"] = (*np.atleast_1d(task.options.seed).tolist(), m + 1)
         if growth is not None and horizon_years is not None:
             update["total_mgt"] = float(growth.mgt_by(horizon_years, members.growth[m]))

@@ -251,11 +251,16 @@ class Members:
         Each member draws its own realisation of the rate field (seeded by its section's
         seed and its number, `trackdyn.forecast.ensemble.member_tasks`); False: every
         member has its section's field.
+    fields : ndarray, optional
+        Rate fields drawn from a calibration's posterior, (draws, 2 rails, sleepers) [-]
+        (`trackdyn.deterioration.ballast.read_field_draws`): member ``m`` runs on draw ``m``
+        modulo their number, in place of its section's field.
     """
 
     parameters: dict
     growth: np.ndarray
     fresh_fields: bool = True
+    fields: np.ndarray | None = None
 
     @property
     def count(self) -> int:
@@ -266,9 +271,16 @@ class Members:
         """The law parameters of ``member`` [SI], for `trackdyn.deterioration.load_law`."""
         return {name: float(v[member]) for name, v in self.parameters.items()}
 
+    def field(self, member: int) -> tuple[tuple[float, ...], ...] | None:
+        """The rate field of ``member`` (`fields`), as `LoopOptions.rate_factor`; None
+        without drawn fields."""
+        if self.fields is None:
+            return None
+        return tuple(map(tuple, self.fields[member % len(self.fields)].tolist()))
+
 
 def sample_members(members: int, seed: int, law, *, spreads=None, posterior=None,
-                   growth: Growth | None = None) -> Members:  # fmt: skip
+                   growth: Growth | None = None, fields=None) -> Members:  # fmt: skip
     """Draw the members of an ensemble, each with a fresh realisation of the rate field.
 
     The random numbers come in a fixed order from one generator seeded with ``seed``: the
@@ -288,6 +300,8 @@ def sample_members(members: int, seed: int, law, *, spreads=None, posterior=None
         A calibration's joint posterior; a parameter cannot have both.
     growth : Growth, optional
         Traffic growth; None: every member's rate is 0.
+    fields : ndarray, optional
+        Rate fields drawn from a calibration's posterior (`Members.fields`).
     """
     if not isinstance(members, int) or members < 2:
         raise TrackdynInputError(f"forecast members must be an integer >= 2, got "
@@ -306,4 +320,4 @@ def sample_members(members: int, seed: int, law, *, spreads=None, posterior=None
     for name, spread in spreads.items():
         parameters[name] = spread.sample(float(getattr(law, name)), rng, members)
     rates = np.zeros(members) if growth is None else growth.rates(rng, members)
-    return Members(parameters, rates)
+    return Members(parameters, rates, fields=fields)

@@ -22,8 +22,13 @@ from trackdyn.units import si_factor
 FILES = ("settlement_fitted.toml", "fit.csv", "calibration.csv", "calibration.png")
 """Files every calibration writes."""
 
-FIELD_FILES = ("rate_field.csv", "rate_field.png")
+FIELD_FILES = ("rate_field.csv", "rate_field.png", "rate_field_draws.csv")
 """Files of a calibration that estimates the rate field."""
+
+FIELD_DRAWS = 64
+"""Fields drawn from the estimate's posterior into ``rate_field_draws.csv`` (seed 0), for a
+deterioration scenario's ``[forecast] rate_field_draws``: a forecast's member ``m`` runs on
+draw ``m`` modulo their number."""
 
 POSTERIOR_FILE = "posterior.toml"
 """The fitted parameters' joint posterior (`trackdyn.forecast.spread.posterior_toml`), for a
@@ -92,6 +97,27 @@ def field_table(result: FitResult) -> pd.DataFrame:
          "standard_error": field.standard_error[r, i]}
         for i, x in enumerate(field.position) for r, rail in enumerate(RAILS)
     ])  # fmt: skip
+
+
+def draws_table(result: FitResult) -> pd.DataFrame:
+    """`FIELD_DRAWS` fields from the estimated field's posterior
+    (`trackdyn.calibration.field.FieldEstimate.draws`, seed 0).
+
+    Columns: ``distance_m`` [m], ``rail``, ``draw`` (1, 2, ...), ``factor`` [-].
+
+    Parameters
+    ----------
+    result : FitResult
+        A fit with an estimated field.
+    """
+    field = result.field
+    assert field is not None  # called for a fit with an estimated field
+    draws = field.draws(FIELD_DRAWS, seed=0)
+    d, r, i = np.meshgrid(np.arange(FIELD_DRAWS), np.arange(len(RAILS)),
+                          np.arange(field.position.size), indexing="ij")  # fmt: skip
+    return pd.DataFrame({"distance_m": field.position[i.ravel()],
+                         "rail": np.asarray(RAILS)[r.ravel()], "draw": d.ravel() + 1,
+                         "factor": draws.ravel()})  # fmt: skip
 
 
 def _rms(values) -> float:
@@ -252,6 +278,7 @@ def write_calibration(problem: Calibration, result: FitResult, folder, where: st
         field_table(result).to_csv(folder / FIELD_FILES[0], index=False, float_format="%.6g")
         fig = plot_field(result.field, extent=problem.fitted_extent)
         save(fig, folder / FIELD_FILES[1])
+        draws_table(result).to_csv(folder / FIELD_FILES[2], index=False, float_format="%.6g")
     if _sampleable(result):
         text = posterior_toml(result.posterior, problem.spec.settlement.law, f"fitted by {where}")
         (folder / POSTERIOR_FILE).write_text(text)

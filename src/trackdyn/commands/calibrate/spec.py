@@ -31,6 +31,7 @@ ignore_m = [[700, 740]]         # distance ranges left out (bridges, switches)
 max_iterations = 30             # evaluations of the misfit (each global fit)
 rate_field = "estimate"         # each rail seat's settlement-rate factor estimated with the
                                 # law (default), or "uniform": factor 1 everywhere
+rate_cov_max = 0.5              # largest coefficient of variation of that factor (illustrative)
 ```
 
 ``[loop] total_mgt`` and ``snapshot_every_mgt`` are refused: the surveys set them; so are
@@ -46,12 +47,14 @@ from typing import Literal
 
 from pydantic import Field, NonNegativeFloat, PositiveFloat, PositiveInt, model_validator
 
+from trackdyn.calibration.field import DEFAULT_RATE_COV_MAX
 from trackdyn.calibration.problem import Calibration, prepare
 from trackdyn.commands.deteriorate.scenario import (
     DeteriorationScenario,
     loop_options,
     resolve_inputs,
 )
+from trackdyn.deterioration.ballast import MAX_RATE_COV
 from trackdyn.options import Strict, load_toml
 
 
@@ -68,7 +71,8 @@ class FitSpec(Strict):
     """``[fit]``: ``parameters`` to fit, ``min_correlation`` [-], ``max_shift_m`` [m],
     ``loss_scale_mm`` [mm], ``ignore_m`` ranges [m], ``max_iterations`` (of each global
     fit), ``rate_field``: ``"estimate"`` (each rail seat's settlement-rate factor, with the
-    law) or ``"uniform"``."""
+    law) or ``"uniform"``, ``rate_cov_max`` [-]: the largest coefficient of variation of
+    the estimated factor (`trackdyn.calibration.field.DEFAULT_RATE_COV_MAX`)."""
 
     parameters: list[str] = Field(min_length=1)
     min_correlation: float = Field(0.7, gt=0, le=1)
@@ -77,6 +81,7 @@ class FitSpec(Strict):
     ignore_m: list[tuple[float, float]] = Field(default_factory=list)
     max_iterations: PositiveInt = 30
     rate_field: Literal["estimate", "uniform"] = "estimate"
+    rate_cov_max: float = Field(DEFAULT_RATE_COV_MAX, gt=0, le=MAX_RATE_COV)
 
     @model_validator(mode="after")
     def _check(self):

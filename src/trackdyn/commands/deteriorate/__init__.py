@@ -50,7 +50,7 @@ def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> 
     if spec.forecast is not None:  # sampled (and refused if wrong) before anything runs
         from trackdyn.commands.deteriorate.forecast import plan_forecast
 
-        plan = plan_forecast(spec, base, tasks[0].law)
+        plan = plan_forecast(spec, base, tasks)
     with output_folder(out, "deteriorate", overwrite, record) as stage:
         datasets = run_sections(tasks, workers=workers, scheduler=scheduler, progress=not serial)
         record.headline = {"sections": summary(datasets).to_dict(orient="records")}

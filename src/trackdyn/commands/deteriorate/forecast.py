@@ -15,6 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from trackdyn.data import load_track
+from trackdyn.deterioration.ballast import read_field_draws
+from trackdyn.errors import TrackdynInputError
 from trackdyn.forecast.ensemble import run_ensemble
 from trackdyn.forecast.spread import Growth, Members, read_posterior, sample_members
 from trackdyn.forecast.summary import first_tamping, forecast_table, reach_probability
@@ -63,7 +66,18 @@ class Plan:
     horizon_years: float | None
 
 
-def plan_forecast(spec, base, law) -> Plan:
+def _field_draws(path, tasks):
+    """The rate fields of ``[forecast] rate_field_draws`` on the one section of ``tasks``."""
+    if len(tasks) > 1:
+        raise TrackdynInputError(f"[forecast] rate_field_draws ({path}): a calibration's "
+                                 f"draws belong to one section, the scenario has "
+                                 f"{len(tasks)}")  # fmt: skip
+    section = tasks[0].section
+    return read_field_draws(path, load_track(section.geometry, section.supports)
+                            .supports.position)  # fmt: skip
+
+
+def plan_forecast(spec, base, tasks) -> Plan:
     """Sample the members of a scenario's ``[forecast]``.
 
     Parameters
@@ -72,17 +86,21 @@ def plan_forecast(spec, base, law) -> Plan:
         The scenario, with a ``forecast`` table.
     base : Path
         Folder its relative paths start from.
-    law : LawParameters
-        The sections' settlement law (its values are the spreads' medians).
+    tasks : list of SectionTask
+        The sections' deterministic tasks (the first's law's values are the spreads'
+        medians).
     """
     f, m = spec.forecast, spec.maintenance
+    law = tasks[0].law
+    fields = None if f.rate_field_draws is None else _field_draws(base / f.rate_field_draws,
+                                                                  tasks)  # fmt: skip
     posterior = None if f.posterior is None else read_posterior(base / f.posterior,
                                                                 spec.settlement.law)  # fmt: skip
     in_years = m is not None and m.horizon_years is not None
     growth = Growth(m.annual_mgt, f.annual_growth, f.annual_growth_sd) if in_years else None
     spreads = {name: s.spread() for name, s in f.parameters.items()}
     members = sample_members(f.members, f.seed, law, spreads=spreads, posterior=posterior,
-                             growth=growth)  # fmt: skip
+                             growth=growth, fields=fields)  # fmt: skip
     return Plan(members, growth, m.horizon_years if in_years else None)
 
 

@@ -46,6 +46,9 @@ min_interval_mgt = 5            # and every other trackdyn.deterioration.mainten
 members = 32                    # ensemble size
 seed = 0                        # seed of the members' samples
 # posterior = "calibration-out/posterior.toml"  # the law's parameters from a calibration
+# rate_field_draws = "calibration-out/rate_field_draws.csv"  # and its rate field's posterior:
+                                # member m on draw m (one section; with [settlement]
+                                # rate_field = "calibration-out/rate_field.csv")
 parameters = { K_s = { cov = 0.3 } }  # or spreads per parameter (SI): { cov = ... }
                                 # lognormal about the law's value, { min = ..., max = ... }
                                 # uniform; the rate field: a fresh realisation per member
@@ -222,12 +225,14 @@ MAX_MEMBERS = 1000
 
 class ForecastSpec(Strict):
     """``[forecast]``: ``members``, ``seed``, the law's parameters from a calibration's
-    ``posterior`` file and/or ``parameters`` spreads, the traffic's ``annual_growth`` and
-    ``annual_growth_sd`` [-/year] (with a horizon in years)."""
+    ``posterior`` file and/or ``parameters`` spreads, a calibration's ``rate_field_draws``
+    (each member on one of them), the traffic's ``annual_growth`` and ``annual_growth_sd``
+    [-/year] (with a horizon in years)."""
 
     members: int = Field(32, ge=2, le=MAX_MEMBERS)
     seed: int = Field(0, ge=0)
     posterior: Path | None = None
+    rate_field_draws: Path | None = None
     parameters: dict[str, SpreadSpec] = Field(default_factory=dict)
     annual_growth: float = Field(0.0, gt=-0.5, lt=1.0)
     annual_growth_sd: float = Field(0.0, ge=0.0, lt=1.0)
