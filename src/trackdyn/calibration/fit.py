@@ -351,8 +351,9 @@ def _field_parts(problem: Calibration):
     band = [band_matrix(problem.x, problem.position,
                         rail_transfer(problem.position, k, problem.EI))
             for k in problem.stiffness]  # fmt: skip
-    return band, Prior(problem.position, problem.spec.settlement.rate_correlation_length_m,
-                       problem.spec.fit.rate_cov_max)
+    s = problem.spec
+    return band, Prior(problem.position, s.settlement.rate_correlation_length_m,
+                       s.fit.rate_cov_max)  # fmt: skip
 
 
 def _joint_covariance(obj: Objective, theta, field: FieldEstimate, parts) -> np.ndarray:
