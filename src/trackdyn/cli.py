@@ -14,7 +14,23 @@ from typing import Annotated
 
 import typer
 
+GLOBAL_FLAGS = ("-q", "--quiet", "-v", "--verbose")
+"""The flags of `main`, taken before or after the command's name."""
+
+
+class _Group(typer.core.TyperGroup):
+    """The command group: `GLOBAL_FLAGS` given after the command's name (``trackdyn run -q``)
+    are moved before it, where they belong; nothing after ``--`` is moved."""
+
+    def parse_args(self, ctx, args):
+        end = args.index("--") if "--" in args else len(args)
+        flags = [a for a in args[:end] if a in GLOBAL_FLAGS]
+        rest = [a for a in args[:end] if a not in GLOBAL_FLAGS]
+        return super().parse_args(ctx, [*flags, *rest, *args[end:]])
+
+
 app = typer.Typer(
+    cls=_Group,
     context_settings={"help_option_names": ["-h", "--help"]},
     pretty_exceptions_enable=False,
     rich_markup_mode=None,
@@ -86,10 +102,11 @@ def _version(value: bool):
 def main(
     ctx: typer.Context,
     version: Annotated[
-        bool, typer.Option("--version", callback=_version, is_eager=True, help="Show version.")
+        bool,
+        typer.Option("--version", "-V", callback=_version, is_eager=True, help="Show version."),
     ] = False,
     quiet: Annotated[
-        bool, typer.Option("--quiet", "-q", help="No progress or status on stderr.")
+        bool, typer.Option("--quiet", "-q", help="Results only: nothing on stderr but errors.")
     ] = False,
     verbose: Annotated[
         bool,
@@ -98,8 +115,9 @@ def main(
 ):
     """Railway vehicle/track vertical dynamics and track deterioration prediction.
 
-    Results go to stdout, progress and status to stderr; every command writes its files
-    and a summary.json into its output folder. Give -q or -v before the command.
+    Results (tables) go to stdout, progress, status and notes to stderr; every command writes
+    its files and a summary.json into its output folder. -q and -v go before or after the
+    command's name.
     """
     from trackdyn.progress import set_verbosity
 
