@@ -38,13 +38,22 @@ app = typer.Typer(
 )
 
 
+FILE_WIDTH = 200
+"""Width of the tables when stdout is not a terminal (a file, a pipe) and ``COLUMNS`` is
+not set [characters]: wide enough that a table is not folded."""
+
+
 class _Stdout:
     """The console of the results (stdout), made on first use: rich loads only then."""
 
     def __getattr__(self, name):
+        import os
+
         from rich.console import Console
 
         console = Console()
+        if not console.is_terminal and "COLUMNS" not in os.environ:
+            console = Console(width=FILE_WIDTH)
         self.__dict__.update({"print": console.print, "status": console.status})
         return getattr(console, name)
 

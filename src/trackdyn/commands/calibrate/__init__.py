@@ -66,9 +66,8 @@ def calibrate(calibration, out, overwrite: bool, workers, scheduler, console) ->
     refined = zip(spec.survey[1:], result.comparison.alignments[1:], strict=True)
     shifts = ", ".join(f"{s.geometry.name} {a.shift:+.3f} m" for s, a in refined)
     note(f"shifts aligned to the fitted prediction: {shifts}")
-    shown = fitted_table(spec.settlement.law, fit_table(problem, result), result.runs)
-    shown.caption = "\n".join(_fit_lines(problem, result))
-    console.print(shown)
+    found = "\n".join(_fit_lines(problem, result))
+    console.print(fitted_table(spec.settlement.law, fit_table(problem, result), result.runs, found))
     console.print(
         frame_table(sd_errors(table), "D1 SD per segment, RMS error of the prediction [mm]")
     )
