@@ -76,6 +76,9 @@ class _Listed(typer.core.TyperCommand):
         pass  # always the listing
 
 
+OUT = "trackdyn-out"
+"""Folder of the commands' default output folders, one per command (``trackdyn-out/run``)."""
+
 OutOption = Annotated[str, typer.Option("--out", metavar="PATH", help="Output folder.")]
 OverwriteOption = Annotated[
     bool, typer.Option(help="Replace another command's outputs in the output folder.")
@@ -152,7 +155,7 @@ def track(
     extrapolate: Annotated[
         bool, typer.Option(help="Allow Ps ± ΔP beyond the measured curves.")
     ] = False,
-    out: OutOption = "trackdyn-out",
+    out: OutOption = f"{OUT}/track",
     overwrite: OverwriteOption = False,
 ):
     """Analyse a track section: loaded profile, linearised stiffness, geometry quality.
@@ -170,7 +173,7 @@ def run(
     scenario: Annotated[
         Path | None, typer.Argument(help="Scenario TOML; default: the built-in example.")
     ] = None,
-    out: OutOption = "trackdyn-out",
+    out: OutOption = f"{OUT}/run",
     overwrite: OverwriteOption = False,
 ):
     """Simulate a vehicle over a track and write results.nc, summary.csv and figures.
@@ -189,7 +192,7 @@ def study(
         Path | None,
         typer.Argument(help="Study TOML; default: the 2-DOF scenario matrix of §5.4.1."),
     ] = None,
-    out: OutOption = "trackdyn-out",
+    out: OutOption = f"{OUT}/study",
     overwrite: OverwriteOption = False,
     workers: Annotated[
         int | None, typer.Option(help="Worker processes (default: one per core; 1: serial).")
@@ -212,7 +215,7 @@ def deteriorate(
         Path | None,
         typer.Argument(help="Deterioration scenario TOML; default: the built-in example."),
     ] = None,
-    out: OutOption = "trackdyn-out",
+    out: OutOption = f"{OUT}/deteriorate",
     overwrite: OverwriteOption = False,
     workers: Annotated[
         int | None,
@@ -235,8 +238,14 @@ def deteriorate(
 @app.command(cls=_Listed)
 @refuse_bad_input
 def calibrate(
-    calibration: Annotated[Path, typer.Argument(help="Calibration TOML (surveys, fit).")],
-    out: OutOption = "trackdyn-out",
+    calibration: Annotated[
+        Path | None,
+        typer.Argument(
+            help="Calibration TOML (surveys, fit); default: the built-in example, three "
+            "synthetic surveys of a 200 m section."
+        ),
+    ] = None,
+    out: OutOption = f"{OUT}/calibrate",
     overwrite: OverwriteOption = False,
     workers: Annotated[
         int | None,
@@ -255,8 +264,10 @@ def calibrate(
     Writes settlement_fitted.toml (for deteriorate's [settlement] file), rate_field.csv
     (for its [settlement] rate_field), fit.csv (fitted values and standard errors),
     calibration.csv (misfit and D1 SD per survey, rail and segment), calibration.png and
-    rate_field.png. A fit that did not converge (fit.max_iterations, or the rate field's
-    rounds) exits 1 (files written, marked not converged) unless --allow-not-converged.
+    rate_field.png. With no calibration file: the built-in example (three synthetic surveys
+    of a 200 m section, as `trackdyn example calibration` writes). A fit that did not
+    converge (fit.max_iterations, or the rate field's rounds) exits 1 (files written,
+    marked not converged) unless --allow-not-converged.
     """
     from trackdyn.commands.calibrate import calibrate as job
 
@@ -282,9 +293,15 @@ def example(
     to: Annotated[
         str, typer.Option("--to", metavar="PATH", help="Folder to write the files into.")
     ] = "trackdyn-example",
-    overwrite: OverwriteOption = False,
+    overwrite: Annotated[
+        bool, typer.Option(help="Replace files of the example's names already in the folder.")
+    ] = False,
 ):
-    """Write the input files of a shipped example into a folder, ready to run."""
+    """Write the input files of a shipped example into a folder, ready to run.
+
+    Files of the example's names already in the folder are refused unless --overwrite;
+    other files there are left alone.
+    """
     from trackdyn.commands.examples import listing, write_example
     from trackdyn.progress import note
 

@@ -18,8 +18,9 @@ def calibrate(calibration, out, overwrite: bool, workers, scheduler, console) ->
 
     Parameters
     ----------
-    calibration : path
-        Calibration TOML file (surveys, fit).
+    calibration : path, optional
+        Calibration TOML file (surveys, fit); None: the built-in example (`trackdyn example
+        calibration`).
     out : Path
         Output folder.
     overwrite : bool
@@ -45,11 +46,13 @@ def calibrate(calibration, out, overwrite: bool, workers, scheduler, console) ->
         write_calibration,
     )
     from trackdyn.commands.calibrate.spec import calibration_problem, load_calibration
+    from trackdyn.commands.examples import example_file
     from trackdyn.parallel import shared_cluster
 
     require_workers(workers)
     started = time.perf_counter()
-    spec, base = load_calibration(calibration)
+    source = example_file("calibration", "calibration.toml") if calibration is None else calibration
+    spec, base = load_calibration(source)
     problem = calibration_problem(spec, base)
     console.print(alignment_table(spec, problem))
     lo, hi = problem.fitted_extent
@@ -61,7 +64,7 @@ def calibrate(calibration, out, overwrite: bool, workers, scheduler, console) ->
     note(f"settlement-rate field: {field} (fit.rate_field)")
     with output_folder(out, "calibrate", overwrite) as stage, shared_cluster(workers, scheduler):
         result = fit(problem, workers=workers, scheduler=scheduler, log=note)
-        table = write_calibration(problem, result, stage, str(calibration))
+        table = write_calibration(problem, result, stage, str(source))
     note(f"the optimiser: {result.message}", 2 if result.converged else 1)
     refined = zip(spec.survey[1:], result.comparison.alignments[1:], strict=True)
     shifts = ", ".join(f"{s.geometry.name} {a.shift:+.3f} m" for s, a in refined)
