@@ -302,12 +302,12 @@ def example(
     Files of the example's names already in the folder are refused unless --overwrite;
     other files there are left alone.
     """
-    from trackdyn.commands.examples import listing, write_example
+    from trackdyn.commands.examples import EXAMPLES, listing, write_example
     from trackdyn.progress import note
 
     if name is None:
         print(listing())
         return
     names, command = write_example(name, to, overwrite)
-    note(f"wrote {', '.join(names)} to {to}")
+    note(f"wrote {', '.join(names)} to {to}: {EXAMPLES[name][0]}")
     print(command)

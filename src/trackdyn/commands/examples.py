@@ -44,7 +44,8 @@ EXAMPLES: dict[str, tuple[str, dict[str, str], str]] = {
         "trackdyn deteriorate {to}/sections.toml --out sections-out",
     ),
     "study": (
-        "three studies: the 2-DOF scenario matrix, a parameter variation, a speed sweep",
+        "three studies, each run by trackdyn study: matrix-2dof.toml (the 2-DOF scenario "
+        "matrix), sensitivity.toml (a parameter variation), speed.toml (a speed sweep)",
         {
             "matrix-2dof.toml": "examples/matrix-2dof.toml",
             "sensitivity.toml": "examples/sensitivity.toml",
@@ -77,7 +78,8 @@ EXAMPLES: dict[str, tuple[str, dict[str, str], str]] = {
 
 def listing() -> str:
     """The examples, one a line: name and what it is."""
-    return "\n".join(f"{name:12} {text}" for name, (text, _, _) in EXAMPLES.items())
+    width = max(map(len, EXAMPLES))
+    return "\n".join(f"{name:{width}}  {text}" for name, (text, _, _) in EXAMPLES.items())
 
 
 def example_file(name: str, target: str) -> Path:
