@@ -14,7 +14,23 @@ from typing import Annotated
 
 import typer
 
+GLOBAL_FLAGS = ("-q", "--quiet", "-v", "--verbose")
+"""The flags of `main`, taken before or after the command's name."""
+
+
+class _Group(typer.core.TyperGroup):
+    """The command group: `GLOBAL_FLAGS` given after the command's name (``trackdyn run -q``)
+    are moved before it, where they belong; nothing after ``--`` is moved."""
+
+    def parse_args(self, ctx, args):
+        end = args.index("--") if "--" in args else len(args)
+        flags = [a for a in args[:end] if a in GLOBAL_FLAGS]
+        rest = [a for a in args[:end] if a not in GLOBAL_FLAGS]
+        return super().parse_args(ctx, [*flags, *rest, *args[end:]])
+
+
 app = typer.Typer(
+    cls=_Group,
     context_settings={"help_option_names": ["-h", "--help"]},
     pretty_exceptions_enable=False,
     rich_markup_mode=None,
@@ -22,13 +38,22 @@ app = typer.Typer(
 )
 
 
+FILE_WIDTH = 200
+"""Width of the tables when stdout is not a terminal (a file, a pipe) and ``COLUMNS`` is
+not set [characters]: wide enough that a table is not folded."""
+
+
 class _Stdout:
     """The console of the results (stdout), made on first use: rich loads only then."""
 
     def __getattr__(self, name):
+        import os
+
         from rich.console import Console
 
         console = Console()
+        if not console.is_terminal and "COLUMNS" not in os.environ:
+            console = Console(width=FILE_WIDTH)
         self.__dict__.update({"print": console.print, "status": console.status})
         return getattr(console, name)
 
@@ -50,6 +75,9 @@ class _Listed(typer.core.TyperCommand):
     def epilog(self, value):
         pass  # always the listing
 
+
+OUT = "trackdyn-out"
+"""Folder of the commands' default output folders, one per command (``trackdyn-out/run``)."""
 
 OutOption = Annotated[str, typer.Option("--out", metavar="PATH", help="Output folder.")]
 OverwriteOption = Annotated[
@@ -86,10 +114,11 @@ def _version(value: bool):
 def main(
     ctx: typer.Context,
     version: Annotated[
-        bool, typer.Option("--version", callback=_version, is_eager=True, help="Show version.")
+        bool,
+        typer.Option("--version", "-V", callback=_version, is_eager=True, help="Show version."),
     ] = False,
     quiet: Annotated[
-        bool, typer.Option("--quiet", "-q", help="No progress or status on stderr.")
+        bool, typer.Option("--quiet", "-q", help="Results only: nothing on stderr but errors.")
     ] = False,
     verbose: Annotated[
         bool,
@@ -98,8 +127,9 @@ def main(
 ):
     """Railway vehicle/track vertical dynamics and track deterioration prediction.
 
-    Results go to stdout, progress and status to stderr; every command writes its files
-    and a summary.json into its output folder. Give -q or -v before the command.
+    Results (tables) go to stdout, progress, status and notes to stderr; every command writes
+    its files and a summary.json into its output folder. -q and -v go before or after the
+    command's name.
     """
     from trackdyn.progress import set_verbosity
 
@@ -125,7 +155,7 @@ def track(
     extrapolate: Annotated[
         bool, typer.Option(help="Allow Ps ± ΔP beyond the measured curves.")
     ] = False,
-    out: OutOption = "trackdyn-out",
+    out: OutOption = f"{OUT}/track",
     overwrite: OverwriteOption = False,
 ):
     """Analyse a track section: loaded profile, linearised stiffness, geometry quality.
@@ -143,7 +173,7 @@ def run(
     scenario: Annotated[
         Path | None, typer.Argument(help="Scenario TOML; default: the built-in example.")
     ] = None,
-    out: OutOption = "trackdyn-out",
+    out: OutOption = f"{OUT}/run",
     overwrite: OverwriteOption = False,
 ):
     """Simulate a vehicle over a track and write results.nc, summary.csv and figures.
@@ -162,7 +192,7 @@ def study(
         Path | None,
         typer.Argument(help="Study TOML; default: the 2-DOF scenario matrix of §5.4.1."),
     ] = None,
-    out: OutOption = "trackdyn-out",
+    out: OutOption = f"{OUT}/study",
     overwrite: OverwriteOption = False,
     workers: Annotated[
         int | None, typer.Option(help="Worker processes (default: one per core; 1: serial).")
@@ -185,7 +215,7 @@ def deteriorate(
         Path | None,
         typer.Argument(help="Deterioration scenario TOML; default: the built-in example."),
     ] = None,
-    out: OutOption = "trackdyn-out",
+    out: OutOption = f"{OUT}/deteriorate",
     overwrite: OverwriteOption = False,
     workers: Annotated[
         int | None,
@@ -208,8 +238,14 @@ def deteriorate(
 @app.command(cls=_Listed)
 @refuse_bad_input
 def calibrate(
-    calibration: Annotated[Path, typer.Argument(help="Calibration TOML (surveys, fit).")],
-    out: OutOption = "trackdyn-out",
+    calibration: Annotated[
+        Path | None,
+        typer.Argument(
+            help="Calibration TOML (surveys, fit); default: the built-in example, three "
+            "synthetic surveys of a 200 m section."
+        ),
+    ] = None,
+    out: OutOption = f"{OUT}/calibrate",
     overwrite: OverwriteOption = False,
     workers: Annotated[
         int | None,
@@ -228,8 +264,10 @@ def calibrate(
     Writes settlement_fitted.toml (for deteriorate's [settlement] file), rate_field.csv
     (for its [settlement] rate_field), fit.csv (fitted values and standard errors),
     calibration.csv (misfit and D1 SD per survey, rail and segment), calibration.png and
-    rate_field.png. A fit that did not converge (fit.max_iterations, or the rate field's
-    rounds) exits 1 (files written, marked not converged) unless --allow-not-converged.
+    rate_field.png. With no calibration file: the built-in example (three synthetic surveys
+    of a 200 m section, as `trackdyn example calibration` writes). A fit that did not
+    converge (fit.max_iterations, or the rate field's rounds) exits 1 (files written,
+    marked not converged) unless --allow-not-converged.
     """
     from trackdyn.commands.calibrate import calibrate as job
 
@@ -255,15 +293,21 @@ def example(
     to: Annotated[
         str, typer.Option("--to", metavar="PATH", help="Folder to write the files into.")
     ] = "trackdyn-example",
-    overwrite: OverwriteOption = False,
+    overwrite: Annotated[
+        bool, typer.Option(help="Replace files of the example's names already in the folder.")
+    ] = False,
 ):
-    """Write the input files of a shipped example into a folder, ready to run."""
-    from trackdyn.commands.examples import listing, write_example
+    """Write the input files of a shipped example into a folder, ready to run.
+
+    Files of the example's names already in the folder are refused unless --overwrite;
+    other files there are left alone.
+    """
+    from trackdyn.commands.examples import EXAMPLES, listing, write_example
     from trackdyn.progress import note
 
     if name is None:
         print(listing())
         return
     names, command = write_example(name, to, overwrite)
-    note(f"wrote {', '.join(names)} to {to}")
+    note(f"wrote {', '.join(names)} to {to}: {EXAMPLES[name][0]}")
     print(command)

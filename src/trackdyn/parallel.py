@@ -12,6 +12,7 @@ another in this process; with ``scheduler`` they go to an existing cluster.
 from __future__ import annotations
 
 import functools
+import logging
 import math
 import os
 import threading
@@ -20,7 +21,7 @@ from contextlib import contextmanager
 from contextvars import ContextVar
 
 from trackdyn.errors import Failure, Status, TrackdynInputError, require_workers
-from trackdyn.progress import progress_bar
+from trackdyn.progress import progress_bar, verbosity
 
 
 def _client(workers: int | None, scheduler: str | None):
@@ -39,7 +40,9 @@ def _client(workers: int | None, scheduler: str | None):
         return _connect(Client, scheduler), None
     # Dask's statistical profiler takes the GIL every 10 ms (a 1 km 11-DOF run took up to
     # twice as long in a worker with it); local workers run without it. Dask's malloc
-    # setting is undone by each task (`keep_freed_memory`).
+    # setting is undone by each task (`keep_freed_memory`). Under -q the cluster's own
+    # warnings (a worker "still alive after 4.0 seconds, killing" at shutdown) are not shown:
+    # the level of the 'distributed' loggers, here and in the workers (`silence_logs`).
     with dask.config.set({"distributed.worker.profile.enabled": False}):
         cluster = LocalCluster(
             n_workers=workers or os.cpu_count() or 1,
@@ -48,6 +51,7 @@ def _client(workers: int | None, scheduler: str | None):
             # the scheduler's HTTP server starts even without a dashboard; on a free port,
             # so a second cluster on the machine (another study, a notebook) is no clash
             dashboard_address=":0",
+            silence_logs=logging.ERROR if verbosity() == 0 else logging.WARNING,
         )
     return Client(cluster), cluster
 

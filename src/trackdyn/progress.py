@@ -1,8 +1,9 @@
 """Progress and status of the commands (rich, on stderr), silent when not shown.
 
-Results go to stdout; progress bars, status lines and notes go to stderr, so that a
-command's output can be piped or redirected without them. `set_verbosity` (the CLI's
-``-q``/``-v``) silences them or adds notes.
+Results (tables) go to stdout; progress bars, status lines and notes go to stderr, so that
+a command's output can be piped or redirected without them. `set_verbosity` (the CLI's
+``-q``/``-v``) silences them or adds notes. Bars and spinners are drawn on a terminal
+only: in a log file they would leave blank lines and nothing else.
 """
 
 from __future__ import annotations
@@ -17,10 +18,34 @@ def set_verbosity(level: int) -> None:
     _settings["verbosity"] = level
 
 
+ETA_AFTER = 3
+"""Updates of a bar before its time remaining is shown: the first ones come after the
+solver is compiled or the workers have started, and the rate they give is far off."""
+
+
+def verbosity() -> int:
+    """The level `set_verbosity` set: 0 quiet, 1 normal, 2 verbose."""
+    return _settings["verbosity"]
+
+
 def _stderr():
     from rich.console import Console
 
     return Console(stderr=True)
+
+
+def _columns() -> list:
+    """Rich's default progress columns, the time remaining shown after `ETA_AFTER` updates."""
+    from rich.progress import Progress, TimeRemainingColumn
+    from rich.text import Text
+
+    class Remaining(TimeRemainingColumn):
+        def render(self, task):
+            if task.fields.get("updates", 0) < ETA_AFTER:
+                return Text("-:--:--", style="progress.remaining")
+            return super().render(task)
+
+    return [*Progress.get_default_columns()[:-1], Remaining()]
 
 
 class _Silent:
@@ -33,15 +58,17 @@ class _Silent:
 
 class _Bar:
     def __init__(self, progress, task):
-        self._progress, self._task = progress, task
+        self._progress, self._task, self._updates = progress, task, 0
 
     def advance(self, n: float = 1) -> None:
         """Move the bar on by ``n`` units."""
-        self._progress.advance(self._task, n)
+        self._updates += 1
+        self._progress.update(self._task, advance=n, updates=self._updates)
 
     def update(self, completed: float) -> None:
         """Move the bar to ``completed`` units."""
-        self._progress.update(self._task, completed=completed)
+        self._updates += 1
+        self._progress.update(self._task, completed=completed, updates=self._updates)
 
 
 @contextmanager
@@ -51,24 +78,29 @@ def progress_bar(show: bool, total: float, label: str):
     Parameters
     ----------
     show : bool
-        Show the bar (False, or verbosity 0: a silent stand-in).
+        Show the bar (False, verbosity 0 or stderr not a terminal: a silent stand-in).
     total : float
         Units of the whole job (steps, runs, MGT).
     label : str
         Text before the bar, with the unit, e.g. ``"tonnage [MGT]"``.
     """
-    if not show or _settings["verbosity"] == 0:
+    console = _stderr() if show and _settings["verbosity"] > 0 else None
+    if console is None or not console.is_terminal:
         yield _Silent()
         return
     from rich.progress import Progress
 
-    with Progress(transient=True, console=_stderr()) as prog:
+    with Progress(*_columns(), transient=True, console=console) as prog:
         yield _Bar(prog, prog.add_task(label, total=total))
 
 
 def status(text: str):
-    """A spinner with ``text`` on stderr while the block runs (nothing when quiet)."""
-    return nullcontext() if _settings["verbosity"] == 0 else _stderr().status(text)
+    """A spinner with ``text`` on stderr while the block runs (nothing when quiet or not on
+    a terminal)."""
+    console = _stderr() if _settings["verbosity"] > 0 else None
+    if console is None or not console.is_terminal:
+        return nullcontext()
+    return console.status(text)
 
 
 def note(text: str, level: int = 1) -> None:

@@ -102,11 +102,27 @@ def run_cli(path, out, *extra):
 
 
 @pytest.fixture(scope="module")
-def fitted(folder):
+def quiet_fit(folder):
+    """The calibration run with -q: its output folder and what it printed."""
     out = folder / "out"
-    result = run_cli(folder / "calibration.toml", out, "--workers", "1")
+    result = run_cli(folder / "calibration.toml", out, "--workers", "1", "-q")
     assert result.exit_code == 0, result.output
-    return out
+    return out, result
+
+
+@pytest.fixture(scope="module")
+def fitted(quiet_fit):
+    return quiet_fit[0]
+
+
+def test_quiet_fit_prints_its_tables_only(quiet_fit):
+    """-q: the tables on stdout (the fit's iteration log and notes are on stderr, shown
+    without -q), nothing on stderr."""
+    _, result = quiet_fit
+    assert result.stderr == ""
+    assert result.stdout.startswith("Surveys aligned to the first")
+    assert "Fitted power law" in result.stdout and "D1 SD per segment" in result.stdout
+    assert "runs:" not in result.stdout and "wrote" not in result.stdout
 
 
 def test_fit_recovers_the_parameters(fitted):
@@ -183,6 +199,7 @@ def test_fit_stopped_by_max_iterations_says_not_converged(folder, tmp_path):
     shown = " ".join(result.stdout.split())  # the console wraps lines
     assert "not converged (stopped by fit.max_iterations = 1)" in shown
     assert "--allow-not-converged" in result.stderr
+    assert "the optimiser: " in result.stderr  # scipy's reason, shown when not converged
     assert "not converged" in (tmp_path / "out" / "settlement_fitted.toml").read_text()
     assert set(pd.read_csv(tmp_path / "out" / "fit.csv").status) == {"not converged"}
     assert not (tmp_path / "out" / "rate_field.csv").exists()  # uniform: no field file

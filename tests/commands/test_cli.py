@@ -45,7 +45,7 @@ def test_version_and_help():
         ("body_bounce_acc_rms_m_per_s2", "bounce RMS\n[m/s²]"),
         ("ballast_mm", "ballast\n[mm]"),
         ("contact", "contact"),
-        ("factor_kp", "factor_kp"),
+        ("factor_kp", "factor kp"),  # the factor of parameter kp
     ],
 )
 def test_table_headers_are_short_with_units(column, expected):

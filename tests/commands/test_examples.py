@@ -87,4 +87,61 @@ def test_every_example_runs_as_its_command_says(name, tmp_path, monkeypatch):
     serial = ["--workers", "1"] if command[1] != "run" else []
     result = runner.invoke(app, ["-q", *command[1:], *serial])
     assert result.exit_code == 0, result.output
+    assert result.stderr == ""  # -q: the results on stdout, nothing else
     assert (tmp_path / command[-1] / ".trackdyn.json").is_file()
+
+
+def test_example_refuses_to_overwrite_files_unless_told(tmp_path):
+    to = tmp_path / "ex"
+    assert runner.invoke(app, ["example", "run", "--to", str(to)]).exit_code == 0
+    (to / "run.toml").write_text("# edited by the user\n")
+    result = runner.invoke(app, ["example", "deteriorate", "--to", str(to)])
+    assert result.exit_code == 2  # its geometry.csv and supports.csv are there
+    assert result.stderr.strip() == (
+        f"error: --to {to}: geometry.csv, supports.csv already there; choose another folder "
+        "or give --overwrite to replace them"
+    )
+    assert not (to / "deteriorate.toml").exists()  # nothing written
+    result = runner.invoke(app, ["example", "run", "--to", str(to)])
+    assert result.exit_code == 2 and "run.toml, geometry.csv" in result.stderr
+    assert (to / "run.toml").read_text() == "# edited by the user\n"
+    # another example's files beside them: the edited run.toml stays
+    assert runner.invoke(app, ["example", "study", "--to", str(to)]).exit_code == 0
+    assert (to / "run.toml").read_text() == "# edited by the user\n"
+    assert runner.invoke(app, ["example", "run", "--to", str(to), "--overwrite"]).exit_code == 0
+    shipped = files("trackdyn").joinpath(EXAMPLES["run"][1]["run.toml"]).read_text()
+    assert (to / "run.toml").read_text() == shipped
+    assert sorted(p.name for p in to.iterdir()) == sorted(
+        {*EXAMPLES["run"][1], *EXAMPLES["study"][1]}
+    )
+
+
+def test_every_command_has_its_own_default_output_folder():
+    import typer
+
+    group = typer.main.get_command(app)
+    defaults = {}
+    for name, command in group.commands.items():
+        (out,) = [p.default for p in command.params if p.name in ("out", "to")]
+        defaults[name] = out
+    assert defaults == {
+        "track": "trackdyn-out/track",
+        "run": "trackdyn-out/run",
+        "study": "trackdyn-out/study",
+        "deteriorate": "trackdyn-out/deteriorate",
+        "calibrate": "trackdyn-out/calibrate",
+        "example": "trackdyn-example",
+    }
+
+
+@pytest.mark.slow
+def test_every_command_runs_bare_one_after_the_other(tmp_path, monkeypatch):
+    """As getting-started says: each command without a file runs on the built-in example,
+    one after the other in one folder (each into its own default output folder)."""
+    monkeypatch.chdir(tmp_path)
+    serial = ["--workers", "1"]
+    for command, extra in (("run", []), ("track", []), ("deteriorate", serial),
+                           ("calibrate", serial)):  # fmt: skip
+        result = runner.invoke(app, ["-q", command, *extra])
+        assert result.exit_code == 0, (command, result.output)
+        assert (tmp_path / "trackdyn-out" / command / ".trackdyn.json").is_file()

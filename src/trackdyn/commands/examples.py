@@ -1,16 +1,20 @@
 """`trackdyn example`: the shipped example inputs written into a folder, ready to run.
 
 Each example is a set of files shipped in the package (``trackdyn/examples`` and the
-built-in section of ``trackdyn/data``), written under the names its scenario uses.
+built-in section of ``trackdyn/data``), written under the names its scenario uses; files of
+those names already in the folder are refused unless ``--overwrite``. The folder gets no
+manifest: it holds inputs, which the user edits, not a command's outputs.
 """
 
 from __future__ import annotations
 
+import os
 import shutil
+import tempfile
 from importlib.resources import files
+from pathlib import Path
 
-from trackdyn.commands.staging import output_folder
-from trackdyn.errors import unknown
+from trackdyn.errors import TrackdynInputError, unknown
 
 _TRACK = {
     "geometry.csv": "data/example_geometry.csv",
@@ -40,7 +44,8 @@ EXAMPLES: dict[str, tuple[str, dict[str, str], str]] = {
         "trackdyn deteriorate {to}/sections.toml --out sections-out",
     ),
     "study": (
-        "three studies: the 2-DOF scenario matrix, a parameter variation, a speed sweep",
+        "three studies, each run by trackdyn study: matrix-2dof.toml (the 2-DOF scenario "
+        "matrix), sensitivity.toml (a parameter variation), speed.toml (a speed sweep)",
         {
             "matrix-2dof.toml": "examples/matrix-2dof.toml",
             "sensitivity.toml": "examples/sensitivity.toml",
@@ -73,11 +78,30 @@ EXAMPLES: dict[str, tuple[str, dict[str, str], str]] = {
 
 def listing() -> str:
     """The examples, one a line: name and what it is."""
-    return "\n".join(f"{name:12} {text}" for name, (text, _, _) in EXAMPLES.items())
+    width = max(map(len, EXAMPLES))
+    return "\n".join(f"{name:{width}}  {text}" for name, (text, _, _) in EXAMPLES.items())
+
+
+def example_file(name: str, target: str) -> Path:
+    """The file of the package that example ``name`` writes as ``target``.
+
+    Parameters
+    ----------
+    name : str
+        A key of `EXAMPLES`.
+    target : str
+        A file the example writes (``calibration.toml``).
+    """
+    return Path(str(files("trackdyn").joinpath(EXAMPLES[name][1][target])))
 
 
 def write_example(name: str, to, overwrite: bool = False) -> tuple[list[str], str]:
-    """Write the files of example ``name`` into the folder ``to``.
+    """Write the files of example ``name`` into the folder ``to``: all of them or, if one
+    cannot be written, none.
+
+    A file of the example's names already in ``to`` (an edited ``run.toml``, another
+    section's ``geometry.csv``) is refused unless ``overwrite``; other files there are left
+    alone.
 
     Parameters
     ----------
@@ -86,7 +110,7 @@ def write_example(name: str, to, overwrite: bool = False) -> tuple[list[str], st
     to : str or Path
         Folder to write into (created if missing).
     overwrite : bool
-        Replace another command's outputs in ``to``.
+        Replace files of the example's names in ``to``.
 
     Returns
     -------
@@ -98,9 +122,27 @@ def write_example(name: str, to, overwrite: bool = False) -> tuple[list[str], st
     if name not in EXAMPLES:
         raise unknown("example", name, EXAMPLES)
     _, sources, command = EXAMPLES[name]
+    if not str(to).strip():
+        raise TrackdynInputError("--to is empty: name a folder")
+    folder = Path(to)
+    if folder.exists() and not folder.is_dir():
+        raise TrackdynInputError(f"--to {to}: exists and is not a folder")
+    there = [target for target in sources if (folder / target).exists()]
+    if there and not overwrite:
+        raise TrackdynInputError(
+            f"--to {to}: {', '.join(there)} already there; choose another folder or give "
+            "--overwrite to replace them"
+        )
     package = files("trackdyn")
-    with output_folder(to, "example", overwrite, flag="--to") as stage:
-        for target, source in sources.items():
-            with package.joinpath(source).open("rb") as src, open(stage / target, "wb") as dst:
-                shutil.copyfileobj(src, dst)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryDirectory(prefix=f".staging-{os.getpid()}-", dir=folder) as tmp:
+            stage = Path(tmp)
+            for target, source in sources.items():
+                with package.joinpath(source).open("rb") as src, open(stage / target, "wb") as dst:
+                    shutil.copyfileobj(src, dst)
+            for target in sources:
+                os.replace(stage / target, folder / target)
+    except OSError as exc:
+        raise TrackdynInputError(f"--to {to}: cannot write there ({exc.strerror})") from None
     return list(sources), command.format(to=to)

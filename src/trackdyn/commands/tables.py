@@ -1,22 +1,32 @@
-"""Tables the commands print: short headers with units, values to 3 significant digits."""
+"""Tables the commands print: headers in words with units, values to 3 significant digits.
+
+A table wider than the console is folded, not cut: its number columns go into as many
+tables as the width needs, each repeating the label columns (`FoldedTable`).
+"""
 
 from __future__ import annotations
 
 import math
+import numbers
+from dataclasses import dataclass
 
 from rich import box
+from rich.measure import Measurement
 from rich.table import Table
 from rich.text import Text
 
 # Units shown for column-name suffixes (longest first, so ``_kN_per_mm`` wins over ``_mm``).
 HEADER_UNITS = {
+    "_m_per_100_mgt": "m/100 MGT",
     "_kN_per_mm": "kN/mm",
     "_m_per_s2": "m/s²",
     "_m_per_s": "m/s",
     "_kmh": "km/h",
+    "_mgt": "MGT",
     "_kN": "kN",
     "_mm": "mm",
     "_Hz": "Hz",
+    "_m": "m",
 }
 # Short names of known quantities (column name without its unit suffix).
 SHORT_NAMES = {
@@ -32,13 +42,19 @@ SHORT_NAMES = {
     "ys_mean": "ys mean",
     "d1_sd_max": "D1 SD max",
     "d2_sd_max": "D2 SD max",
+    "mgt": "MGT",
+    "error_start": "error at the start",
+    "life_cycle_cost": "life-cycle cost",
 }
 # Notes printed under a table whose headers use the symbol.
 NOTES = {"ΔP": "ΔP: dynamic wheel load (wheel load - static wheel load)"}
 
+MISSING = "–"
+"""A value that is missing (NaN: a failed run, a quantity without data)."""
+
 
 def header(column: str) -> str:
-    """Short table header of a column: its quantity, then its unit in brackets.
+    """Table header of a column: its quantity in words, then its unit in brackets.
 
     Parameters
     ----------
@@ -48,21 +64,115 @@ def header(column: str) -> str:
     Returns
     -------
     str
-        ``"ΔP max\\n[kN]"`` for a known quantity and unit; the column as it is if its
-        suffix is not a known unit.
+        ``"ΔP max\\n[kN]"`` for a known quantity and unit, ``"tamped\\n[m]"`` for
+        ``tamped_m``; words without underscores (``"tamping cost"``) where the name has no
+        unit suffix; ``factor_k_ss`` (a parameter's factor) as ``"factor k_ss"``.
     """
+    if column.startswith("factor_"):
+        return f"factor {column.removeprefix('factor_')}"
     for suffix, unit in HEADER_UNITS.items():
         if column.endswith(suffix):
             stem = column.removesuffix(suffix)
-            return f"{SHORT_NAMES.get(stem, stem)}\n[{unit}]"
-    return column
+            return f"{_words(stem)}\n[{unit}]"
+    return _words(column)
 
 
-def frame_table(table, title: str) -> Table:
-    """A DataFrame as a rich table, short headers with units, 3 significant digits.
+def _words(name: str) -> str:
+    return SHORT_NAMES.get(name, name.replace("_", " "))
+
+
+def cell(value) -> str:
+    """A value as the tables show it: text as it is; numbers to 3 significant digits, from
+    1000 on in full without an exponent (a length of 1199 m, not 1.2e+03); NaN and None as
+    `MISSING`.
+
+    Parameters
+    ----------
+    value : str or number
+        The value.
+    """
+    if isinstance(value, str):
+        return value
+    if value is None:
+        return MISSING
+    if isinstance(value, numbers.Integral):  # numpy's integers too
+        return str(value)
+    if math.isnan(value):
+        return MISSING
+    if math.isinf(value) or abs(value) < 1000:
+        return f"{value:.3g}"
+    return f"{value:.0f}"
+
+
+@dataclass
+class FoldedTable:
+    """A table that, too wide for the console, prints as several: the label columns (the
+    leading text columns) in each, the other columns in as many groups as the width
+    needs; the title above the first, the caption under the last.
+
+    Parameters
+    ----------
+    title : str
+        Title above the (first) table.
+    caption : str or None
+        Text under the (last) table.
+    labels : list of (str, list of str)
+        Label columns: header and cells.
+    columns : list of (str, list of str)
+        The other columns: header and cells.
+    """
+
+    title: str
+    caption: str | None
+    labels: list
+    columns: list
+
+    def table(self, columns: list, first: bool = True, last: bool = True, narrow=False) -> Table:
+        """The rich table of the label columns and ``columns``; ``narrow``: each column as
+        wide as its widest value or header word (rich, left to fit a table to the width,
+        may cut a column below that)."""
+        show = Table(title=self.title if first else None,
+                     caption=self.caption if last else None, box=box.SIMPLE_HEAD)  # fmt: skip
+        pairs = [*self.labels, *columns]
+        for h, cells in pairs:
+            least = max(len(w) for w in [*h.split(), *cells])
+            show.add_column(Text(h), min_width=least, width=least if narrow else None)
+        for row in zip(*(cells for _, cells in pairs), strict=True):
+            show.add_row(*map(Text, row))
+        return show
+
+    def groups(self, console, options) -> list[list]:
+        """The columns in consecutive groups, each as many as fit the width with the
+        labels when narrow (at least one)."""
+        out: list[list] = [[]]
+        for column in self.columns:
+            trial = [*out[-1], column]
+            if out[-1] and _width(console, self.table(trial, narrow=True)) > options.max_width:
+                out.append([column])
+            else:
+                out[-1] = trial
+        return out
+
+    def __rich_console__(self, console, options):
+        groups = self.groups(console, options)
+        for k, group in enumerate(groups):
+            show = self.table(group, first=k == 0, last=k == len(groups) - 1)
+            if _width(console, show) > options.max_width:
+                show = self.table(group, first=k == 0, last=k == len(groups) - 1, narrow=True)
+            yield show
+
+
+def _width(console, table: Table) -> int:
+    """The width ``table`` takes when nothing limits it [characters]."""
+    return Measurement.get(console, console.options.update(max_width=10**6), table).maximum
+
+
+def frame_table(table, title: str) -> FoldedTable:
+    """A DataFrame as a table: headers in words with units, values by `cell`.
 
     No column is narrower than its widest value or header word: at a narrow terminal the
-    headers wrap between words instead of being cut.
+    headers wrap between words, and a table that still does not fit is folded
+    (`FoldedTable`) instead of being cut.
 
     Parameters
     ----------
@@ -73,16 +183,11 @@ def frame_table(table, title: str) -> Table:
     """
     headers = [header(str(col)) for col in table.columns]
     notes = [note for symbol, note in NOTES.items() if any(symbol in h for h in headers)]
-    show = Table(title=title, caption="\n".join(notes) or None, box=box.SIMPLE_HEAD)
-    rows = [
-        [v if isinstance(v, str) else f"{v:.3g}" for v in row]
-        for row in table.itertuples(index=False)
-    ]
-    for j, h in enumerate(headers):
-        show.add_column(Text(h), min_width=max(len(w) for w in [*h.split(), *(r[j] for r in rows)]))
-    for row in rows:
-        show.add_row(*map(Text, row))
-    return show
+    cells = [[cell(v) for v in table[col]] for col in table.columns]
+    text = [table[col].dtype.kind not in "biufc" for col in table.columns]
+    leading = next((j for j, t in enumerate(text) if not t), len(text))
+    pairs = list(zip(headers, cells, strict=True))
+    return FoldedTable(title, "\n".join(notes) or None, pairs[:leading], pairs[leading:])
 
 
 def deterioration_table(table, title: str) -> Table:
@@ -153,7 +258,7 @@ def alignment_table(spec, problem) -> Table:
     return show
 
 
-def fitted_table(law: str, fit, runs: int) -> Table:
+def fitted_table(law: str, fit, runs: int, caption: str | None = None) -> Table:
     """The fitted settlement-law parameters in the parameter file's units.
 
     Parameters
@@ -164,8 +269,11 @@ def fitted_table(law: str, fit, runs: int) -> Table:
         `trackdyn.commands.calibrate.outputs.fit_table` of the fit.
     runs : int
         Model runs of the fit.
+    caption : str, optional
+        Text under the table (what the fit found beside it).
     """
-    show = Table(title=f"Fitted {law} law ({runs} model runs)")
+    show = Table(title=f"Fitted {law} law ({runs} model runs)",
+                 caption=None if caption is None else Text(caption))  # fmt: skip
     for col in ("parameter", "start", "fitted", "standard error", "bounds", "unit", "status"):
         show.add_column(Text(col))
     for row in fit.itertuples(index=False):

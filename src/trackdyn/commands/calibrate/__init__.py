@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
-from trackdyn.commands.staging import output_folder
+from trackdyn.commands.staging import Record, output_folder
 from trackdyn.commands.tables import alignment_table, fitted_table, frame_table
 from trackdyn.errors import require_workers
+from trackdyn.progress import note
 
 
 def calibrate(calibration, out, overwrite: bool, workers, scheduler, console) -> bool:
@@ -15,8 +18,9 @@ def calibrate(calibration, out, overwrite: bool, workers, scheduler, console) ->
 
     Parameters
     ----------
-    calibration : path
-        Calibration TOML file (surveys, fit).
+    calibration : path, optional
+        Calibration TOML file (surveys, fit); None: the built-in example (`trackdyn example
+        calibration`).
     out : Path
         Output folder.
     overwrite : bool
@@ -26,7 +30,8 @@ def calibrate(calibration, out, overwrite: bool, workers, scheduler, console) ->
     scheduler : str, optional
         Address of a running Dask scheduler.
     console : rich.console.Console
-        Where the alignments, the fit's progress and its result are shown.
+        Where the tables are shown (stdout): the alignments, the fit, the errors; the
+        fit's progress and notes go to stderr.
 
     Returns
     -------
@@ -38,49 +43,64 @@ def calibrate(calibration, out, overwrite: bool, workers, scheduler, console) ->
         files_of,
         fit_table,
         sd_errors,
-        status,
         write_calibration,
     )
     from trackdyn.commands.calibrate.spec import calibration_problem, load_calibration
+    from trackdyn.commands.examples import example_file
     from trackdyn.parallel import shared_cluster
 
     require_workers(workers)
-    spec, base = load_calibration(calibration)
+    started = time.perf_counter()
+    source = example_file("calibration", "calibration.toml") if calibration is None else calibration
+    spec, base = load_calibration(source)
     problem = calibration_problem(spec, base)
     console.print(alignment_table(spec, problem))
     lo, hi = problem.fitted_extent
-    console.print(
+    note(
         f"compared: {lo:.1f}-{hi:.1f} m ({hi - lo:.1f} m) of the first survey's distances "
         "(the stretch every aligned survey and the supports cover, less the band-pass ends)"
     )
     field = "estimated per rail seat" if spec.fit.rate_field == "estimate" else "uniform"
-    console.print(f"settlement-rate field: {field} (fit.rate_field)")
+    note(f"settlement-rate field: {field} (fit.rate_field)")
     with output_folder(out, "calibrate", overwrite) as stage, shared_cluster(workers, scheduler):
-        result = fit(problem, workers=workers, scheduler=scheduler, log=console.print)
-        table = write_calibration(problem, result, stage, str(calibration))
-    console.print(fitted_table(spec.settlement.law, fit_table(problem, result), result.runs))
+        result = fit(problem, workers=workers, scheduler=scheduler, log=note)
+        table = write_calibration(problem, result, stage, str(source))
+    note(f"the optimiser: {result.message}", 2 if result.converged else 1)
+    refined = zip(spec.survey[1:], result.comparison.alignments[1:], strict=True)
+    shifts = ", ".join(f"{s.geometry.name} {a.shift:+.3f} m" for s, a in refined)
+    note(f"shifts aligned to the fitted prediction: {shifts}")
+    found = "\n".join(_fit_lines(problem, result))
+    console.print(fitted_table(spec.settlement.law, fit_table(problem, result), result.runs, found))
+    console.print(
+        frame_table(sd_errors(table), "D1 SD per segment, RMS error of the prediction [mm]")
+    )
+    note(f"wrote {', '.join(files_of(result))} to {out}")
+    record = Record("trackdyn calibrate", {"calibration": calibration})
+    record.timings["total"] = time.perf_counter() - started
+    note("\n".join(record.lines()), 2)
+    return result.converged
+
+
+def _fit_lines(problem, result) -> list[str]:
+    """What the fit found beside its table: the misfit and status, the parameters' error
+    correlations, the rate field."""
+    from trackdyn.commands.calibrate.outputs import status
+
+    lines = [
+        f"RMS misfit of the D1-band change: {result.rms_start:.3f} mm at the start, "
+        f"{result.rms_fit:.3f} mm fitted: {status(result)}"
+    ]
     for i, j in zip(*np.triu_indices(len(problem.names), 1), strict=True):
-        console.print(
+        lines.append(
             f"{problem.names[i]} and {problem.names[j]}: errors correlated "
             f"{result.correlation[i, j]:+.2f}"
         )
     if result.field is not None:
         f = result.field
-        console.print(
+        lines.append(
             f"rate field: {result.rounds} round(s); prior cov {f.cov:.2f} chosen by marginal "
             f"likelihood, noise {f.noise_mm:.3f} mm; factor {f.factor.min():.2f}-"
             f"{f.factor.max():.2f}, median standard error "
             f"{float(np.median(f.standard_error[:, f.observed])):.2f} where compared"
         )
-    console.print(
-        f"RMS misfit of the D1-band change: {result.rms_start:.3f} mm at the start, "
-        f"{result.rms_fit:.3f} mm fitted: {status(result)} ({result.message})"
-    )
-    refined = zip(spec.survey[1:], result.comparison.alignments[1:], strict=True)
-    shifts = ", ".join(f"{s.geometry.name} {a.shift:+.3f} m" for s, a in refined)
-    console.print(f"shifts aligned to the fitted prediction: {shifts}")
-    console.print(
-        frame_table(sd_errors(table), "D1 SD per segment, RMS error of the prediction [mm]")
-    )
-    console.print(f"wrote {', '.join(files_of(result))} to {out}")
-    return result.converged
+    return lines

@@ -13,6 +13,7 @@ import dataclasses
 from trackdyn.commands.staging import Record, output_folder
 from trackdyn.commands.tables import deterioration_table, forecast_table
 from trackdyn.errors import require_workers
+from trackdyn.progress import note
 
 
 def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> None:
@@ -61,7 +62,8 @@ def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> 
     console.print(deterioration_table(summary(datasets), title))
     if plan is not None:
         console.print(forecast_table(table, f"First tamping, {plan.members.count} members"))
-    console.print(f"wrote {len(files)} files (deterioration_*.nc, CSV tables, figures) to {out}")
+    note(f"wrote {len(files)} files (deterioration_*.nc, CSV tables, figures) to {out}")
+    note("\n".join(record.lines()), 2)
 
 
 def _forecast(plan, tasks, workers, scheduler, stage, files, record):

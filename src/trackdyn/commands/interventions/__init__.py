@@ -49,6 +49,7 @@ from trackdyn.data import EXAMPLE_GEOMETRY, EXAMPLE_SUPPORTS, example_path, load
 from trackdyn.deterioration.runs import Section
 from trackdyn.errors import TrackdynInputError, named, require_workers
 from trackdyn.options import Strict, load_toml, parse
+from trackdyn.progress import note
 from trackdyn.studies.interventions import (
     Scale,
     costs,
@@ -281,5 +282,5 @@ def interventions(path, out, overwrite: bool, workers, scheduler, console) -> No
             title = f"Interventions over {spec.horizon_mgt:g} MGT"
             save(plot_comparison(table, title=title), stage / "interventions_compared.png")
     console.print(frame_table(table, f"Interventions over {spec.horizon_mgt:g} MGT"))
-    console.print(f"wrote interventions_compared.csv/.nc/.png and interventions_segments.csv "
-                  f"to {out}")  # fmt: skip
+    note(f"wrote interventions_compared.csv/.nc/.png and interventions_segments.csv to {out}")
+    note("\n".join(record.lines()), 2)

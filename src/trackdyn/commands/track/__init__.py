@@ -366,6 +366,7 @@ def track(
             for col, value in row.items()
         }
         write_track_outputs(ds, picks, basin, stage, [] if given else example_marks())
-    console.print(frame_table(table, f"Track summary ({ds.attrs['geometry_source']})"))
+    source = geometry if given else f"built-in example, {EXAMPLE_GEOMETRY}"
+    console.print(frame_table(table, f"Track summary ({source})"))
     note(f"wrote track.nc, summary.json and 3 figures to {out}")
     note("\n".join(record.lines()), 2)
