@@ -7,8 +7,9 @@ seed = the truth's number), the power law at K_s = 0.8 mm and exponent 2.5, a se
 rate field of cov 0.3 over 3 m (its own seed), the 4-DOF model, loaded and empty coal
 wagons. Surveys at 0, 2 and 5 MGT (0.3 mm noise, a 2.7 m offset) are calibrated as
 ``trackdyn calibrate`` does (K_s and the exponent with the rate field), and the section is
-forecast to `HORIZON_MGT` with `MEMBERS` members drawn from the calibration's posterior on
-its calibrated field. The truth's first tamping of each 100 m segment (its D1 SD reaching
+forecast from the first survey to `HORIZON_MGT` with `MEMBERS` members drawn from the
+calibration's posterior (``posterior.toml``), each on a draw of its rate field's posterior
+(``rate_field_draws.csv``). The truth's first tamping of each 100 m segment (its D1 SD reaching
 `THRESHOLD_MM` on either rail, the true law and field) is inside or outside the members'
 p10-p90; the coverage is the share inside over all segments of all truths (an honest 80 %
 interval holds 0.65-0.95 of them), with the mean width of the finite intervals.
@@ -113,8 +114,14 @@ def honest(truths: int) -> None:
                               zip(truth, low, high, strict=True))  # fmt: skip
             print(f"truth {k}: first tamping [MGT] {shown} ({time.perf_counter() - clock:.0f} s)")
     truth, low, high = (np.concatenate(x) for x in zip(*rows, strict=True))
-    width = high - low
+    with np.errstate(invalid="ignore"):  # inf - inf: an interval beyond the horizon
+        width = high - low
     finite = np.isfinite(width)
+    seen = np.isfinite(truth)
+    print(
+        f"coverage of the segment-truths tamped within the horizon: "
+        f"{coverage(truth[seen], low[seen], high[seen]):.2f} of {seen.sum()}"
+    )
     print(
         f"coverage of the 10-90 % interval: {coverage(truth, low, high):.2f} of "
         f"{truth.size} segment-truths (honest: 0.65-0.95); mean width "

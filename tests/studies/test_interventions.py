@@ -147,7 +147,7 @@ def test_costs_in_closed_form():
 
 def test_an_alternative_without_changes_is_the_scenario_itself(folder, tmp_path):
     study, _ = load_toml(InterventionsStudy, folder / "study.toml")
-    labelled, _ = alternative_tasks(study, folder / "study.toml", tmp_path)
+    labelled, *_ = alternative_tasks(study, folder / "study.toml", tmp_path)
     alone = [(name, t) for name, t in labelled if name == "base"]
     spec, base = load_deterioration(folder / "scenario.toml")
     got = run_alternatives(alone, workers=1)[0]
@@ -172,7 +172,7 @@ def test_settlement_scale_multiplies_the_rate_in_its_range_only(folder, tmp_path
     for name in ("scenario.toml", "geometry.csv", "supports.csv"):
         (tmp_path / name).write_bytes((folder / name).read_bytes())
     study, _ = load_toml(InterventionsStudy, tmp_path / "study.toml")
-    labelled, _ = alternative_tasks(study, tmp_path / "study.toml", tmp_path)
+    labelled, *_ = alternative_tasks(study, tmp_path / "study.toml", tmp_path)
     task = {name: t for name, t in labelled}
     x = read_supports(tmp_path / "supports.csv").position
     inside = (x >= 21.0) & (x <= 39.0)
@@ -188,7 +188,7 @@ def test_settlement_scale_multiplies_the_rate_in_its_range_only(folder, tmp_path
 
 def test_a_failed_run_names_its_section_and_alternative(folder, tmp_path):
     study, _ = load_toml(InterventionsStudy, folder / "study.toml")
-    labelled, _ = alternative_tasks(study, folder / "study.toml", tmp_path)
+    labelled, *_ = alternative_tasks(study, folder / "study.toml", tmp_path)
     name, task = labelled[1]
     gone = dataclasses.replace(task.section, supports=str(tmp_path / "gone.csv"))
     with pytest.raises(TrackdynInputError, match="section geometry of alternative 'spot-fixed': "):
@@ -234,7 +234,7 @@ def test_the_shipped_example_expands_to_its_alternatives(tmp_path):
     to = tmp_path / "ex"
     assert runner.invoke(app, ["example", "interventions", "--to", str(to)]).exit_code == 0
     study, _ = load_toml(InterventionsStudy, to / "interventions.toml")
-    labelled, _ = alternative_tasks(study, to / "interventions.toml", tmp_path)
+    labelled, *_ = alternative_tasks(study, to / "interventions.toml", tmp_path)
     assert [name for name, _ in labelled] == [a.name for a in study.alternative]  # 1 section
     # soft-spot-fixed and pads-at-the-bridge scale supports; a section of files is named
     # after its geometry
@@ -277,3 +277,53 @@ def test_a_scenario_without_maintenance_is_refused(folder, tmp_path):
     assert result.exit_code == 2
     assert "plain.toml: no [maintenance] table: nothing to compare" in result.output
     assert not out.exists()
+
+
+def test_cost_spread_in_closed_form():
+    from trackdyn.commands.interventions.spread import cost_spread
+
+    # 4 members x 2 alternatives: b cheapest in members 0 and 1, a in 2, a tie in 3
+    costs = np.array([[5.0, 3.0], [6.0, 4.0], [1.0, 2.0], [7.0, 7.0]])
+    got = cost_spread(costs, ["a", "b"]).set_index("alternative")
+    # probability cheapest: b 2 + 0.5 of 4 members = 0.625, a 1 + 0.5 = 0.375
+    assert got.loc["b", "probability_cheapest"] == 0.625
+    assert got.loc["a", "probability_cheapest"] == 0.375
+    # p10/p50/p90 are members' values (inverted_cdf): a's sorted 1, 5, 6, 7 -> 1, 5, 7
+    assert got.loc["a", ["life_cycle_cost_p10", "life_cycle_cost_p50",
+                         "life_cycle_cost_p90"]].tolist() == [1.0, 5.0, 7.0]  # fmt: skip
+    assert got.loc["a", "life_cycle_cost_mean"] == 4.75 and got.loc["a", "members"] == 4
+
+
+def test_a_forecast_scenario_gives_each_alternatives_cost_spread(folder, tmp_path):
+    """With ``[forecast]`` (3 members, the Sato law's gamma lognormal cov 0.3), every alternative runs on
+    every member; the spread file's quantiles are those of the members' own costs, which
+    are the life-cycle costs of each member run alone (`member_tasks` then `compare`)."""
+    from trackdyn.commands.deteriorate.forecast import plan_forecast
+    from trackdyn.commands.interventions import compare
+    from trackdyn.forecast.ensemble import member_tasks
+
+    forecast = "[forecast]\nmembers = 3\nseed = 2\nparameters = { gamma = { cov = 0.3 } }\n"
+    (tmp_path / "scenario.toml").write_text(
+        SCENARIO.replace('"geometry.csv"', repr(str(folder / "geometry.csv")))
+        .replace('"supports.csv"', repr(str(folder / "supports.csv"))) + forecast
+    )  # fmt: skip
+    (tmp_path / "study.toml").write_text(STUDY)
+    out = tmp_path / "out"
+    result = runner.invoke(app, ["study", str(tmp_path / "study.toml"), "--out", str(out),
+                                 "--workers", "1"])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    spread = pd.read_csv(out / "interventions_spread.csv").set_index("alternative")
+    assert spread.probability_cheapest.sum() == pytest.approx(1.0)
+    # the members' costs, run here member by member
+    study, _ = load_toml(InterventionsStudy, tmp_path / "study.toml")
+    labelled, spec, base = alternative_tasks(study, tmp_path / "study.toml", tmp_path)
+    plan = plan_forecast(spec, base, [t for alt, t in labelled if alt == "base"])
+    each = []
+    for m in range(3):
+        pairs = [(alt, member_tasks(t, plan.members)[m]) for alt, t in labelled]
+        table, _ = compare(study, [a for a, _ in pairs], run_alternatives(pairs, workers=1))
+        each.append(table.set_index("alternative").life_cycle_cost)
+    costs = pd.concat(each, axis=1)
+    for name in ("base", "spot-fixed"):
+        assert spread.loc[name, "life_cycle_cost_p50"] == sorted(costs.loc[name])[1]
+        assert spread.loc[name, "life_cycle_cost_mean"] == pytest.approx(costs.loc[name].mean())

@@ -37,10 +37,12 @@ import numpy as np
 import pandas as pd
 from pydantic import Field, NonNegativeFloat, PositiveFloat, StrictFloat, model_validator
 
+from trackdyn.commands.deteriorate.forecast import plan_forecast
 from trackdyn.commands.deteriorate.outputs import life_cycle_table
 from trackdyn.commands.deteriorate.scenario import DeteriorationScenario, load_deterioration
 from trackdyn.commands.deteriorate.sections import NAME, section_tasks
 from trackdyn.commands.interventions.plots import plot_comparison
+from trackdyn.commands.interventions.spread import cost_spread, member_labelled
 from trackdyn.commands.netcdf import write_netcdf
 from trackdyn.commands.plots import save
 from trackdyn.commands.staging import Record, output_folder
@@ -166,7 +168,7 @@ def scenario_file(study: InterventionsStudy, path) -> Path:
 
 
 def alternative_tasks(study: InterventionsStudy, path, folder: Path):
-    """The section tasks of every alternative, in order, and the scenario.
+    """The section tasks of every alternative, in order, the scenario and its folder.
 
     Parameters
     ----------
@@ -198,7 +200,7 @@ def alternative_tasks(study: InterventionsStudy, path, folder: Path):
                 sec = _scaled_section(t.section, alt, folder)
                 options = _settlement_scaled(t.options, sec, alt)
                 tasks.append((alt.name, dataclasses.replace(t, section=sec, options=options)))
-    return tasks, spec
+    return tasks, spec, base
 
 
 def run_alternatives(labelled, *, workers=None, scheduler=None, progress=False) -> list:
@@ -242,6 +244,34 @@ def compare(study: InterventionsStudy, names, datasets) -> tuple[pd.DataFrame, p
     return pd.DataFrame(rows), frame[["alternative", *frame.columns[:-1]]]
 
 
+SPREAD_FILE = "interventions_spread.csv"
+"""Each alternative's life-cycle cost over the forecast's members (`cost_spread`), written
+when the scenario has ``[forecast]``."""
+
+
+def _plan(spec, base, labelled):
+    """The scenario's forecast members (`plan_forecast` on the first alternative's
+    sections), or None without ``[forecast]``."""
+    if spec.forecast is None:
+        return None
+    first = [t for alt, t in labelled if alt == labelled[0][0]]
+    return plan_forecast(spec, base, first)
+
+
+def _spread(study, labelled, plan, workers, scheduler) -> pd.DataFrame:
+    """Run every alternative on every member; `cost_spread` of their life-cycle costs."""
+    pairs, member = member_labelled(labelled, plan)
+    datasets = run_alternatives(pairs, workers=workers, scheduler=scheduler, progress=True)
+    names = np.array([alt for alt, _ in pairs])
+    alternatives = [alt.name for alt in study.alternative]
+    costs = np.empty((len(plan.members.growth), len(alternatives)))
+    for m in range(costs.shape[0]):
+        mine = np.flatnonzero(member == m)
+        table, _ = compare(study, list(names[mine]), [datasets[i] for i in mine])
+        costs[m] = table.set_index("alternative").loc[alternatives, "life_cycle_cost"]
+    return cost_spread(costs, alternatives)
+
+
 def interventions(path, out, overwrite: bool, workers, scheduler, console) -> None:
     """Run an interventions study; write interventions_compared.csv/.nc, the life cycle per
     segment (interventions_segments.csv) and interventions_compared.png.
@@ -264,7 +294,8 @@ def interventions(path, out, overwrite: bool, workers, scheduler, console) -> No
     study, _ = load_toml(InterventionsStudy, path)
     require_workers(workers)
     with tempfile.TemporaryDirectory(prefix="trackdyn-interventions-") as scratch:
-        labelled, spec = alternative_tasks(study, path, Path(scratch))
+        labelled, spec, base = alternative_tasks(study, path, Path(scratch))
+        plan = _plan(spec, base, labelled)
         title = f"trackdyn study: interventions, {len(study.alternative)} alternatives"
         record = Record(title, {"study": path, "scenario": scenario_file(study, path)},
                         {"study": study.model_dump(mode="json"),
@@ -281,6 +312,16 @@ def interventions(path, out, overwrite: bool, workers, scheduler, console) -> No
                             float_format="%.6g")  # fmt: skip
             title = f"Interventions over {spec.horizon_mgt:g} MGT"
             save(plot_comparison(table, title=title), stage / "interventions_compared.png")
+            spread = None
+            if plan is not None:
+                spread = _spread(study, labelled, plan, workers, scheduler)
+                record.headline["life_cycle_cost_spread"] = spread.to_dict(orient="records")
+                spread.to_csv(stage / SPREAD_FILE, index=False, float_format="%.6g")
     console.print(frame_table(table, f"Interventions over {spec.horizon_mgt:g} MGT"))
-    note(f"wrote interventions_compared.csv/.nc/.png and interventions_segments.csv to {out}")
+    if spread is not None:
+        console.print(frame_table(spread, f"Life-cycle cost over {len(plan.members.growth)} "
+                                          "forecast members"))  # fmt: skip
+    written = ", ".join(["interventions_compared.csv/.nc/.png", "interventions_segments.csv",
+                         *([SPREAD_FILE] if spread is not None else [])])  # fmt: skip
+    note(f"wrote {written} to {out}")
     note("\n".join(record.lines()), 2)
