@@ -113,11 +113,12 @@ def main(
 @refuse_bad_input
 def track(
     geometry: Annotated[
-        Path | None, typer.Option(help="Geometry CSV (distance_m,left_mm,right_mm).")
+        Path | None,
+        typer.Option(help="Geometry CSV (distance_m,left_mm,right_mm).", readable=False),
     ] = None,
     supports: Annotated[
         Path | None,
-        typer.Option(help="Supports CSV (distance_m,rail,load_kN,deflection_mm)."),
+        typer.Option(help="Supports CSV (distance_m,rail,load_kN,deflection_mm).", readable=False),
     ] = None,
     wheel_load_kN: Annotated[float, typer.Option(help="Static wheel load Ps [kN].")] = 127.5,
     delta: Annotated[float, typer.Option(help="Dynamic wheel load increment δ [-].")] = 0.3,
@@ -141,7 +142,8 @@ def track(
 @refuse_bad_input
 def run(
     scenario: Annotated[
-        Path | None, typer.Argument(help="Scenario TOML; default: the built-in example.")
+        Path | None,
+        typer.Argument(help="Scenario TOML; default: the built-in example.", readable=False),
     ] = None,
     out: OutOption = "trackdyn-out",
     overwrite: OverwriteOption = False,
@@ -160,7 +162,9 @@ def run(
 def study(
     study_file: Annotated[
         Path | None,
-        typer.Argument(help="Study TOML; default: the 2-DOF scenario matrix of §5.4.1."),
+        typer.Argument(
+            help="Study TOML; default: the 2-DOF scenario matrix of §5.4.1.", readable=False
+        ),
     ] = None,
     out: OutOption = "trackdyn-out",
     overwrite: OverwriteOption = False,
@@ -183,7 +187,9 @@ def study(
 def deteriorate(
     scenario: Annotated[
         Path | None,
-        typer.Argument(help="Deterioration scenario TOML; default: the built-in example."),
+        typer.Argument(
+            help="Deterioration scenario TOML; default: the built-in example.", readable=False
+        ),
     ] = None,
     out: OutOption = "trackdyn-out",
     overwrite: OverwriteOption = False,
@@ -208,7 +214,9 @@ def deteriorate(
 @app.command(cls=_Listed)
 @refuse_bad_input
 def calibrate(
-    calibration: Annotated[Path, typer.Argument(help="Calibration TOML (surveys, fit).")],
+    calibration: Annotated[
+        Path, typer.Argument(help="Calibration TOML (surveys, fit).", readable=False)
+    ],
     out: OutOption = "trackdyn-out",
     overwrite: OverwriteOption = False,
     workers: Annotated[

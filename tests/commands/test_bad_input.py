@@ -1,6 +1,7 @@
 """Bad input of every command, one row each: refused with exit code 2, one line, no files.
 
-A row gives the command line, the files it reads and a fragment of the expected message.
+A row gives the command line, the files it reads (text, or bytes where the encoding is
+the point) and a fragment of the expected message.
 In the files and arguments ``{track}`` stands for a folder holding a 300 m section
 (``g.csv``, ``s.csv``), that geometry with a NaN at line 12 (``gnan.csv``), supports
 covering only its first 50 m (``s50.csv``) and every 17th sleeper only, 10.2 m apart
@@ -9,8 +10,13 @@ runs in a folder of its own, with ``--out out`` unless the row gives ``--out``; 
 that folder holds the row's files and nothing else.
 """
 
+import errno
+import os
+import shutil
+
 import pandas as pd
 import pytest
+import xarray as xr
 from typer.testing import CliRunner
 
 from trackdyn.cli import app
@@ -142,6 +148,21 @@ CASES = [
         "give both a geometry and a supports file",
     ),
     (["run", "bad.toml"], {"bad.toml": "not toml ["}, "not valid TOML"),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": "# Prüfstrecke\n[run]\nspeed_kmh = 60\n".encode("latin-1")},
+        "bad.toml: line 1: byte 0xfc is not UTF-8 (saved as Latin-1",
+    ),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": "[run]\nspeed_kmh = 60\n".encode("utf-16")},
+        "bad.toml: saved as UTF-16 (or not text); save it as UTF-8",
+    ),
+    (
+        ["track", "--geometry", "g.csv", "--supports", "{track}/s.csv"],
+        {"g.csv": "distance_m;left_mm;right_mm\n0;1,5;2,0\n0,25;1,5;2,0\n"},
+        "g.csv: columns separated by ';' (a spreadsheet's CSV with decimal commas?)",
+    ),
     (["track", "--wheel-load-kN", "0"], {}, "--wheel-load-kN is 0 kN, outside the plausible"),
     (["track", "--wheel-load-kN", "-3"], {}, "--wheel-load-kN is -3 kN, outside the plausible"),
     (["track", "--rail", "UIC99"], {}, "unknown rail section"),
@@ -284,7 +305,10 @@ def test_bad_input_is_refused(tmp_path, monkeypatch, track_folder, args, files, 
     monkeypatch.chdir(tmp_path)
     folder = track_folder.as_posix()
     for name, text in files.items():
-        (tmp_path / name).write_text(text.replace("{track}", folder))
+        if isinstance(text, bytes):
+            (tmp_path / name).write_bytes(text)
+        else:
+            (tmp_path / name).write_text(text.replace("{track}", folder))
     args = [a.replace("{track}", folder) for a in args]
     if "--out" not in args:
         args += ["--out", "out"]
@@ -293,3 +317,86 @@ def test_bad_input_is_refused(tmp_path, monkeypatch, track_folder, args, files, 
     assert message in result.stderr, result.stderr
     assert len(result.stderr.strip().splitlines()) == 1  # one line, no traceback
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(files)  # nothing written
+
+
+def test_a_scenario_with_a_byte_order_mark_is_read(tmp_path, monkeypatch):
+    """A TOML saved by Windows Notepad starts with a UTF-8 byte-order mark (before: "not
+    valid TOML"); it is refused or accepted as the same file without the mark."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "bom.toml").write_bytes(b"\xef\xbb\xbf[run]\nspeeed = 3\n")
+    result = runner.invoke(app, ["run", "bom.toml", "--out", "out"])
+    assert result.exit_code == 2
+    assert "bom.toml: unknown key 'run.speeed'" in result.stderr  # read past the mark
+
+
+TRACK_ARGS = ["track", "--geometry", "{track}/g.csv", "--supports", "{track}/s.csv"]
+
+
+def _full_disk_errors(monkeypatch, how: str):
+    """Make every netCDF write fail as on a full file system: with ENOSPC, or as netCDF-4
+    reports it (``NetCDF: HDF error``, no errno) with no space left there."""
+
+    def fail(self, *args, **kwargs):
+        if how == "errno":
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        raise RuntimeError("NetCDF: HDF error")
+
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", fail)
+    if how == "hdf":
+        full = shutil.disk_usage(".")._replace(free=0)
+        monkeypatch.setattr(shutil, "disk_usage", lambda path: full)
+
+
+@pytest.mark.parametrize("how", ["errno", "hdf"])
+def test_a_full_disk_is_one_line_and_keeps_the_previous_outputs(
+    tmp_path, monkeypatch, track_folder, how
+):
+    """The output folder's file system fills up while the outputs are written (before: a
+    77-line ``RuntimeError: NetCDF: HDF error``): one line, and the previous run's files
+    as they were."""
+    monkeypatch.chdir(tmp_path)
+    args = [a.replace("{track}", track_folder.as_posix()) for a in TRACK_ARGS]
+    assert runner.invoke(app, [*args, "--out", "out"]).exit_code == 0
+    before = {p.name: p.read_bytes() for p in (tmp_path / "out").iterdir()}
+    _full_disk_errors(monkeypatch, how)
+    for out in ("out", "new"):
+        result = runner.invoke(app, [*args, "--out", out])
+        assert result.exit_code == 2, result.output
+        assert result.stderr.startswith(f"error: no space left on {out}: nothing written")
+        assert len(result.stderr.strip().splitlines()) == 1
+    assert {p.name: p.read_bytes() for p in (tmp_path / "out").iterdir()} == before
+    assert not (tmp_path / "new").exists()
+
+
+UNREADABLE = [
+    # (command line, the file made unreadable, files {name: text})
+    (["run", "bad.toml"], "bad.toml", {"bad.toml": "[run]\nspeed_kmh = 60\n"}),
+    (["run", "bad.toml"], "g.csv", {"bad.toml": '[track]\ngeometry = "g.csv"\n'
+                                                'supports = "{track}/s.csv"\n'}),
+    (["track", "--geometry", "g.csv", "--supports", "{track}/s.csv"], "g.csv", {}),
+    (["deteriorate", "bad.toml"], "z.csv", {"bad.toml": '[track]\ngeometry = "g.csv"\n'
+                                            'supports = "{track}/s.csv"\nzones = "z.csv"\n',
+                                            "z.csv": "start_m,end_m,kind\n0,50,structure\n"}),
+    (["deteriorate", "bad.toml"], "l.csv", {"bad.toml": '[track]\nsections = "l.csv"\n',
+                                            "l.csv": "name,geometry,supports\na,g.csv,s.csv\n"}),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("args", "unreadable", "files"), UNREADABLE)
+def test_an_unreadable_file_is_named(tmp_path, monkeypatch, track_folder, args, unreadable, files):
+    """A file without read permission (before: a 68-line PermissionError, or click's
+    four-line usage error for a file given on the command line): one line naming it."""
+    monkeypatch.chdir(tmp_path)
+    folder = track_folder.as_posix()
+    shutil.copy(track_folder / "g.csv", tmp_path / "g.csv")
+    for name, text in files.items():
+        (tmp_path / name).write_text(text.replace("{track}", folder))
+    (tmp_path / unreadable).chmod(0)
+    if os.access(tmp_path / unreadable, os.R_OK):
+        pytest.skip("files without read permission are readable here (root)")
+    args = [a.replace("{track}", folder) for a in args]
+    result = runner.invoke(app, [*args, "--out", "out"])
+    assert result.exit_code == 2, result.output
+    assert f"{unreadable}: cannot read the file (Permission denied)" in result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()
