@@ -106,9 +106,12 @@ def _read_csv(path, **options) -> pd.DataFrame:
         raise _unreadable(path, exc) from None
 
 
-def read_table(path, required: tuple[str, ...]) -> pd.DataFrame:
+def read_table(
+    path, required: tuple[str, ...], optional: tuple[str, ...] | None = None
+) -> pd.DataFrame:
     """A small CSV table of text cells (a sections list, a zone table), with its
     ``required`` columns and at least one row; line ``i + 2`` of the file is row ``i``.
+    Only an empty cell is missing (NaN): ``NA`` or ``null`` is text, as a name may be.
 
     Parameters
     ----------
@@ -116,12 +119,20 @@ def read_table(path, required: tuple[str, ...]) -> pd.DataFrame:
         The CSV file.
     required : tuple of str
         Columns it must have.
+    optional : tuple of str, optional
+        Columns it may have besides; any other is refused. None: any.
     """
-    frame = _read_csv(path, dtype=str)
+    frame = _read_csv(path, dtype=str, keep_default_na=False, na_values=[""])
     frame.columns = [str(c).strip() for c in frame.columns]
     missing = [c for c in required if c not in frame.columns]
     if missing:
         raise TrackdynInputError(f"{path}: no column {missing[0]!r} ({','.join(required)})")
+    known = required + (optional or ())
+    other = [c for c in frame.columns if optional is not None and c not in known]
+    if other:
+        raise TrackdynInputError(
+            f"{path}: unknown column {other[0]!r}; the columns are {', '.join(known)}"
+        )
     if frame.empty:
         raise TrackdynInputError(f"{path}: no rows")
     return frame
