@@ -42,6 +42,10 @@ MAX_STEPS = 1e8
 """Most time steps of one run: about 20 minutes of the compiled scheme; a step count above
 it comes from a time step or a path length typed in the wrong unit."""
 
+MAX_TOTAL_MGT = 1e4
+"""Longest horizon of a deterioration loop [MGT]: 40 years of 250 MGT, the heaviest
+heavy-haul traffic; beyond, a tonnage typed in tonnes or a horizon in the wrong unit."""
+
 MEMORY_FRACTION = 0.5
 """Fraction of the machine's physical memory one computation may plan to hold
 (`require_memory`): the rest is for the system, the other workers and what the estimates

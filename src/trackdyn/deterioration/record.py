@@ -11,12 +11,8 @@ import numpy as np
 from trackdyn.deterioration.options import LoopOptions
 from trackdyn.deterioration.settlement import LawParameters
 from trackdyn.errors import TrackdynInputError
-from trackdyn.limits import require_memory
+from trackdyn.limits import MAX_TOTAL_MGT, require_memory
 from trackdyn.track.track import Geometry, Track
-
-MAX_TOTAL_MGT = 1e4
-"""Longest horizon of a deterioration loop [MGT]: 40 years of 250 MGT, the heaviest
-heavy-haul traffic; beyond, a tonnage typed in tonnes or a horizon in the wrong unit."""
 
 BYTES_PER_STORED_STEP = 1.2e3
 """Memory of the loop per stored step of each vehicle's run [bytes] (the runs' wheel
