@@ -4,8 +4,8 @@ A row gives the command line, the files it reads (text, or bytes where the encod
 the point) and a fragment of the expected message.
 In the files and arguments ``{track}`` stands for a folder holding a 300 m section
 (``g.csv``, ``s.csv``), that geometry with a NaN at line 12 (``gnan.csv``), supports
-covering only its first 50 m (``s50.csv``) and every 17th sleeper only, 10.2 m apart
-(``s10.csv``). Each case
+covering only its first 50 m (``s50.csv``), every 17th sleeper only, 10.2 m apart
+(``s10.csv``), and all but three sleepers in a row, a 2.4 m gap (``sgap.csv``). Each case
 runs in a folder of its own, with ``--out out`` unless the row gives ``--out``; afterwards
 that folder holds the row's files and nothing else.
 """
@@ -412,7 +412,12 @@ CASES += [
         {"bad.toml": SECTIONS, "l.csv": sections_list("name,geometry,supports", "..")},
         "l.csv: line 2: section name '..' is empty, repeated or not made of letters",
     ),
-    # runs: stored steps
+    # runs: stored steps, a gap the discrete track does not span
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": TRACK.replace("s50.csv", "sgap.csv") + '[run]\ntrack = "discrete"\n'},
+        "sgap.csv: sleepers at 119.7 and 122.1 m are 2.4 m apart, more than the discrete",
+    ),
     (
         ["run", "bad.toml"],
         {"bad.toml": SECTION + "[run]\nstore_every = 1000000000\n"},
@@ -440,6 +445,8 @@ def track_folder(tmp_path_factory):
     rows[rows["distance_m"] < 50].to_csv(folder / "s50.csv", index=False)
     every_17th = rows["distance_m"].isin(rows["distance_m"].unique()[::17])
     rows[every_17th].to_csv(folder / "s10.csv", index=False)
+    three = rows["distance_m"].isin(rows["distance_m"].unique()[200:203])  # 120.3-121.5 m
+    rows[~three].to_csv(folder / "sgap.csv", index=False)
     return folder
 
 
