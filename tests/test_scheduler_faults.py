@@ -1,7 +1,11 @@
 """A scheduler address where no Dask scheduler answers, and a scheduler lost mid-run: each
 ends in a one-line refusal within seconds, not a hang or a traceback."""
 
+import logging
+import signal
 import socket
+import subprocess
+import sys
 import threading
 import time
 
@@ -46,3 +50,44 @@ def test_a_scheduler_lost_mid_run_is_one_line():
     assert "\n" not in str(info.value)
     assert info.value.status is Status.WORKER_LOST  # not refused input: the CLI's line all the same
     assert time.perf_counter() - clock < 30.0
+
+
+def _process(*args: str) -> subprocess.Popen:
+    """A Dask command-line program (``dask_scheduler``, ``dask_worker``) of this Python."""
+    command = [sys.executable, "-m", f"distributed.cli.{args[0]}", *args[1:], "--no-dashboard"]
+    return subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+
+class _Kept(logging.Handler):
+    """A log handler that keeps the records it is given."""
+
+    def __init__(self):
+        super().__init__()
+        self.records: list[logging.LogRecord] = []
+
+    def emit(self, record):
+        self.records.append(record)
+
+
+def test_a_scheduler_killed_mid_run_logs_nothing():
+    """A scheduler process killed outright (SIGKILL) while its worker runs the tasks
+    (before: Dask's client logged 32 lines of tracebacks as it tried to reconnect, then
+    the one line): the one line only."""
+    with socket.socket() as probe:  # a free port
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    address = f"tcp://127.0.0.1:{port}"
+    scheduler = _process("dask_scheduler", "--host", "127.0.0.1", "--port", str(port))
+    worker = _process("dask_worker", address, "--nthreads", "1")
+    kept = _Kept()
+    logging.getLogger("distributed.client").addHandler(kept)
+    try:
+        threading.Timer(8.0, scheduler.send_signal, (signal.SIGKILL,)).start()
+        with pytest.raises(TrackdynError, match="lost the Dask scheduler at tcp://"):
+            parallel.run_tasks([2.0] * 10, time.sleep, scheduler=address)
+    finally:
+        logging.getLogger("distributed.client").removeHandler(kept)
+        for process in (worker, scheduler):
+            process.kill()
+            process.wait()
+    assert [r.getMessage() for r in kept.records if r.levelno >= logging.ERROR] == []

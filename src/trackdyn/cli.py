@@ -143,11 +143,12 @@ def main(
 @refuse_bad_input
 def track(
     geometry: Annotated[
-        Path | None, typer.Option(help="Geometry CSV (distance_m,left_mm,right_mm).")
+        Path | None,
+        typer.Option(help="Geometry CSV (distance_m,left_mm,right_mm).", readable=False),
     ] = None,
     supports: Annotated[
         Path | None,
-        typer.Option(help="Supports CSV (distance_m,rail,load_kN,deflection_mm)."),
+        typer.Option(help="Supports CSV (distance_m,rail,load_kN,deflection_mm).", readable=False),
     ] = None,
     wheel_load_kN: Annotated[float, typer.Option(help="Static wheel load Ps [kN].")] = 127.5,
     delta: Annotated[float, typer.Option(help="Dynamic wheel load increment δ [-].")] = 0.3,
@@ -171,7 +172,8 @@ def track(
 @refuse_bad_input
 def run(
     scenario: Annotated[
-        Path | None, typer.Argument(help="Scenario TOML; default: the built-in example.")
+        Path | None,
+        typer.Argument(help="Scenario TOML; default: the built-in example.", readable=False),
     ] = None,
     out: OutOption = f"{OUT}/run",
     overwrite: OverwriteOption = False,
@@ -190,7 +192,9 @@ def run(
 def study(
     study_file: Annotated[
         Path | None,
-        typer.Argument(help="Study TOML; default: the 2-DOF scenario matrix of §5.4.1."),
+        typer.Argument(
+            help="Study TOML; default: the 2-DOF scenario matrix of §5.4.1.", readable=False
+        ),
     ] = None,
     out: OutOption = f"{OUT}/study",
     overwrite: OverwriteOption = False,
@@ -213,7 +217,9 @@ def study(
 def deteriorate(
     scenario: Annotated[
         Path | None,
-        typer.Argument(help="Deterioration scenario TOML; default: the built-in example."),
+        typer.Argument(
+            help="Deterioration scenario TOML; default: the built-in example.", readable=False
+        ),
     ] = None,
     out: OutOption = f"{OUT}/deteriorate",
     overwrite: OverwriteOption = False,
@@ -242,7 +248,8 @@ def calibrate(
         Path | None,
         typer.Argument(
             help="Calibration TOML (surveys, fit); default: the built-in example, three "
-            "synthetic surveys of a 200 m section."
+            "synthetic surveys of a 200 m section.",
+            readable=False,
         ),
     ] = None,
     out: OutOption = f"{OUT}/calibrate",

@@ -26,11 +26,13 @@ class Status(enum.Enum):
     NON_FINITE = "non-finite result"
     SETTLEMENT_RAN_AWAY = "settlement ran away"
     WORKER_LOST = "worker lost"
+    NO_SPACE = "no space left on device"
     FAILED = "failed"  # anything else: a bug, reported with where it was raised
 
 
 class TrackdynError(Exception):
-    """A failure of trackdyn with its `Status`; the message is one line.
+    """A failure of trackdyn with its `Status`; the message is one line (line breaks in
+    the text it is made from, such as a library's message quoted in it, become spaces).
 
     The CLI prints it without a traceback and exits with code 2.
     """
@@ -38,7 +40,7 @@ class TrackdynError(Exception):
     status: Status = Status.FAILED
 
     def __init__(self, message: str, status: Status | None = None):
-        super().__init__(message)
+        super().__init__(" ".join(str(message).split()) if "\n" in str(message) else message)
         if status is not None:
             self.status = status
 

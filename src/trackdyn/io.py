@@ -37,22 +37,81 @@ COLUMN_KINDS = {
 CHUNK_ROWS = 100_000
 """Rows of a CSV parsed at a time by the chunked readers (`geometry_pieces`, `support_pieces`)."""
 
-_UNREADABLE = (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError)
+_UNREADABLE = (pd.errors.ParserError, pd.errors.EmptyDataError)
+
+HEAD_BYTES = 4096
+"""Bytes of a CSV file looked at before pandas reads it (`_readable`)."""
+
+UTF8_BOM = b"\xef\xbb\xbf"
+UTF16_BOMS = (b"\xff\xfe", b"\xfe\xff")
+
+
+def _text(path, data: bytes) -> str:
+    """``data``, the bytes of the file ``path``, as text: UTF-8, a byte-order mark (as
+    Windows editors write) dropped; UTF-16 or bytes that are not UTF-8 refused in one line.
+    """
+    if data.startswith(UTF16_BOMS) or b"\x00" in data:
+        raise TrackdynInputError(f"{path}: saved as UTF-16 (or not text); save it as UTF-8")
+    try:
+        return data.removeprefix(UTF8_BOM).decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        raise TrackdynInputError(
+            f"{path}: line {line}: byte 0x{data[exc.start]:02x} is not UTF-8 (saved as "
+            "Latin-1 or Windows-1252?); save the file as UTF-8"
+        ) from None
+
+
+def _bytes(path, size: int = -1) -> bytes:
+    """The first ``size`` bytes of the file ``path`` (all: -1); a file that is missing or
+    cannot be read (permissions, a folder) is refused in one line."""
+    path = Path(path)
+    if not path.exists():
+        raise TrackdynInputError(f"{path}: no such file")
+    try:
+        with open(path, "rb") as fh:
+            return fh.read(size)
+    except OSError as exc:
+        raise TrackdynInputError(f"{path}: cannot read the file ({exc.strerror})") from None
+
+
+def _readable(path: Path) -> None:
+    """Refuse a CSV file that cannot be read, is not UTF-8 text, or separates its columns
+    with ``;`` (a spreadsheet's CSV where the decimal point is a comma)."""
+    head = _bytes(path, HEAD_BYTES)
+    if head.startswith(UTF16_BOMS) or b"\x00" in head:
+        _text(path, head)
+    lines = (line.strip() for line in head.decode("utf-8", "replace").splitlines())
+    header = next((line for line in lines if line and not line.startswith("#")), "")
+    if ";" in header and "," not in header:
+        raise TrackdynInputError(
+            f"{path}: columns separated by ';' (a spreadsheet's CSV with decimal commas?); "
+            "trackdyn reads ',' between columns and '.' as the decimal point"
+        )
+
+
+def _unreadable(path, exc: Exception) -> TrackdynInputError:
+    """The refusal of a CSV file that pandas could not parse (``exc``)."""
+    if isinstance(exc, UnicodeDecodeError):
+        _text(path, _bytes(path))  # raises, naming the line
+    return TrackdynInputError(f"{path}: not a readable CSV file ({exc})")
 
 
 def _read_csv(path, **options) -> pd.DataFrame:
     path = Path(path)
-    if not path.is_file():
-        raise TrackdynInputError(f"{path}: no such file")
+    _readable(path)
     try:
         return pd.read_csv(path, comment="#", skipinitialspace=True, **options)
-    except _UNREADABLE as exc:
-        raise TrackdynInputError(f"{path}: not a readable CSV file ({exc})") from None
+    except (*_UNREADABLE, UnicodeDecodeError) as exc:
+        raise _unreadable(path, exc) from None
 
 
-def read_table(path, required: tuple[str, ...]) -> pd.DataFrame:
+def read_table(
+    path, required: tuple[str, ...], optional: tuple[str, ...] | None = None
+) -> pd.DataFrame:
     """A small CSV table of text cells (a sections list, a zone table), with its
     ``required`` columns and at least one row; line ``i + 2`` of the file is row ``i``.
+    Only an empty cell is missing (NaN): ``NA`` or ``null`` is text, as a name may be.
 
     Parameters
     ----------
@@ -60,12 +119,20 @@ def read_table(path, required: tuple[str, ...]) -> pd.DataFrame:
         The CSV file.
     required : tuple of str
         Columns it must have.
+    optional : tuple of str, optional
+        Columns it may have besides; any other is refused. None: any.
     """
-    frame = _read_csv(path, dtype=str)
+    frame = _read_csv(path, dtype=str, keep_default_na=False, na_values=[""])
     frame.columns = [str(c).strip() for c in frame.columns]
     missing = [c for c in required if c not in frame.columns]
     if missing:
         raise TrackdynInputError(f"{path}: no column {missing[0]!r} ({','.join(required)})")
+    known = required + (optional or ())
+    other = [c for c in frame.columns if optional is not None and c not in known]
+    if other:
+        raise TrackdynInputError(
+            f"{path}: unknown column {other[0]!r}; the columns are {', '.join(known)}"
+        )
     if frame.empty:
         raise TrackdynInputError(f"{path}: no rows")
     return frame
@@ -79,8 +146,8 @@ def _read_chunks(path, rows: int, **options) -> Iterator[pd.DataFrame]:
                 yield next(reader)
             except StopIteration:
                 return
-            except _UNREADABLE as exc:
-                raise TrackdynInputError(f"{path}: not a readable CSV file ({exc})") from None
+            except (*_UNREADABLE, UnicodeDecodeError) as exc:
+                raise _unreadable(path, exc) from None
 
 
 def column(frame: pd.DataFrame, quantity: str, kind: str, where) -> tuple[np.ndarray, str]:
@@ -356,13 +423,12 @@ def write_supports(supports: Supports, path) -> None:
 
 
 def read_toml(path) -> dict:
-    """Read a TOML file; a missing or malformed file is a one-line error."""
+    """Read a TOML file (UTF-8, with or without a byte-order mark); a missing, unreadable,
+    malformed or otherwise encoded file is a one-line error."""
     path = Path(path)
+    text = _text(path, _bytes(path))
     try:
-        with open(path, "rb") as fh:
-            return tomllib.load(fh)
-    except OSError:
-        raise TrackdynInputError(f"{path}: cannot read the file") from None
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise TrackdynInputError(f"{path}: not valid TOML ({exc})") from None
 

@@ -8,6 +8,7 @@ deviation or a wheel flying off the rail.
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 
@@ -40,6 +41,44 @@ WHEEL_LOAD = (1e3, 5e5)
 MAX_STEPS = 1e8
 """Most time steps of one run: about 20 minutes of the compiled scheme; a step count above
 it comes from a time step or a path length typed in the wrong unit."""
+
+MAX_TOTAL_MGT = 1e4
+"""Longest horizon of a deterioration loop [MGT]: 40 years of 250 MGT, the heaviest
+heavy-haul traffic; beyond, a tonnage typed in tonnes or a horizon in the wrong unit."""
+
+MEMORY_FRACTION = 0.5
+"""Fraction of the machine's physical memory one computation may plan to hold
+(`require_memory`): the rest is for the system, the other workers and what the estimates
+leave out."""
+
+
+def memory_budget() -> float:
+    """Memory one computation may hold [bytes]: `MEMORY_FRACTION` of the machine's physical
+    memory (read with ``os.sysconf``; unbounded where the system does not say)."""
+    try:
+        return MEMORY_FRACTION * os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return math.inf
+
+
+def require_memory(needed: float, what: str) -> None:
+    """Refuse, before allocating it, a computation estimated to need more than
+    `memory_budget`.
+
+    Parameters
+    ----------
+    needed : float
+        Estimated memory [bytes].
+    what : str
+        What needs it and why, for the message (``"a run of 1.2e+07 stored steps"``).
+    """
+    budget = memory_budget()
+    if needed > budget:
+        raise TrackdynInputError(
+            f"{what} needs about {needed / 1e9:.3g} GB of memory, more than the "
+            f"{budget / 1e9:.3g} GB allowed ({MEMORY_FRACTION:.0%} of this machine's memory)"
+        )
+
 
 VEHICLE = {
     # Masses [kg] and inertias [kg m^2]: the shipped presets' smallest value / 10 to their

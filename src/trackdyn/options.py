@@ -47,9 +47,10 @@ from trackdyn.vehicle.parameters import load_vehicle, vehicle_source
 
 
 class Strict(BaseModel):
-    """Base of scenario tables: unknown keys are refused, values are frozen."""
+    """Base of scenario tables: unknown keys are refused, values are frozen, and ``inf``
+    and ``nan`` are no number."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 class RunOptions(Strict):
@@ -208,8 +209,8 @@ def parse(model: type[BaseModel], data: dict, where: str):
         return model.model_validate(data)
     except ValidationError as exc:
         err = exc.errors()[0]
-        loc = ".".join(str(x) for x in err["loc"]) or "(top level)"
+        loc = ".".join(str(x) for x in err["loc"])
         if err["type"] == "extra_forbidden":
-            raise TrackdynInputError(f"{where}: unknown key {loc!r}") from None
+            raise TrackdynInputError(f"{where}: unknown key {loc or '(top level)'!r}") from None
         msg = err["msg"].removeprefix("Value error, ")
-        raise TrackdynInputError(f"{where}: {loc}: {msg}") from None
+        raise TrackdynInputError(f"{where}: {loc + ': ' if loc else ''}{msg}") from None

@@ -11,13 +11,13 @@ another in this process; with ``scheduler`` they go to an existing cluster.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import logging
 import math
 import os
 import threading
 from concurrent.futures import CancelledError
-from contextlib import contextmanager
 from contextvars import ContextVar
 
 from trackdyn.errors import Failure, Status, TrackdynInputError, require_workers
@@ -87,7 +87,7 @@ def _connect(client_class, scheduler: str):
 _shared: ContextVar = ContextVar("trackdyn_shared_client", default=None)
 
 
-@contextmanager
+@contextlib.contextmanager
 def shared_cluster(workers: int | None = None, scheduler: str | None = None):
     """Keep one Dask client (and local cluster) for every `run_tasks` call in the block.
 
@@ -106,15 +106,34 @@ def shared_cluster(workers: int | None = None, scheduler: str | None = None):
     if workers == 1 and not scheduler:
         yield
         return
-    client, cluster = _client(workers, scheduler)
-    token = _shared.set(client)
+    with _cluster(workers, scheduler) as client:
+        token = _shared.set(client)
+        try:
+            yield
+        finally:
+            _shared.reset(token)
+
+
+@contextlib.contextmanager
+def _cluster(workers: int | None, scheduler: str | None):
+    """A Dask client (of a local cluster, or of ``scheduler``), closed with its cluster at
+    the end; meanwhile Dask's client logs only what is critical: a lost scheduler, which
+    it logs with tracebacks while it tries to reconnect, ends the work in one line
+    (`run_tasks`). After a failure the client's log stays quiet: the client logs the end
+    of its reconnection after it is closed."""
+    import logging
+
+    client, cluster = _client(workers, scheduler)  # importing distributed sets its log levels
+    log = logging.getLogger("distributed.client")
+    level = log.level
+    log.setLevel(logging.CRITICAL)
     try:
-        yield
+        yield client
     finally:
-        _shared.reset(token)
         client.close()
         if cluster is not None:
             cluster.close()
+    log.setLevel(level)
 
 
 MMAP_THRESHOLD = 32 * 1024 * 1024
@@ -276,25 +295,30 @@ def run_tasks(
                 results += call(group)
                 bar.advance(len(group))
             return results
-        from distributed import as_completed
-
         shared = _shared.get()
-        client, cluster = (shared, None) if shared is not None else _client(workers, scheduler)
-        try:
-            count = max(1, len(client.scheduler_info()["workers"]))
-            parts = groups(tasks, together, count)
-            futures = client.map(functools.partial(_on_one_core, call), parts, pure=False)
-            size = {f.key: len(part) for f, part in zip(futures, parts, strict=True)}
-            for future in as_completed(futures):
-                bar.advance(size[future.key])
-            return _outcomes(client, futures, parts)
-        except (CancelledError, OSError) as exc:  # the scheduler went away mid-run
-            where = f" at {scheduler}" if scheduler else ""
-            reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-            lost = f"lost the Dask scheduler{where} during the run; nothing was written ({reason})"
-            raise Failure(Status.WORKER_LOST, lost).error() from None
-        finally:
-            if shared is None:
-                client.close()
-                if cluster is not None:
-                    cluster.close()
+        with (
+            contextlib.nullcontext(shared)
+            if shared is not None
+            else _cluster(workers, scheduler) as client
+        ):
+            return _on_cluster(client, tasks, call, together, bar, scheduler)
+
+
+def _on_cluster(client, tasks: list, call, together: int, bar, scheduler: str | None) -> list:
+    """The results of ``call`` on ``tasks`` in groups, run through ``client``; a lost
+    scheduler is a one-line `TrackdynError` of status ``WORKER_LOST``."""
+    from distributed import as_completed
+
+    try:
+        count = max(1, len(client.scheduler_info()["workers"]))
+        parts = groups(tasks, together, count)
+        futures = client.map(functools.partial(_on_one_core, call), parts, pure=False)
+        size = {f.key: len(part) for f, part in zip(futures, parts, strict=True)}
+        for future in as_completed(futures):
+            bar.advance(size[future.key])
+        return _outcomes(client, futures, parts)
+    except (CancelledError, OSError) as exc:  # the scheduler went away mid-run
+        where = f" at {scheduler}" if scheduler else ""
+        reason = str(exc).rpartition("reason: ")[2].strip(" .") or type(exc).__name__
+        lost = f"lost the Dask scheduler{where} during the run; nothing was written ({reason})"
+        raise Failure(Status.WORKER_LOST, lost).error() from None

@@ -20,12 +20,13 @@ import numpy as np
 import xarray as xr
 
 from trackdyn.errors import Failure, TrackdynInputError
-from trackdyn.limits import MAX_STEPS
+from trackdyn.limits import MAX_STEPS, require_memory
 from trackdyn.options import RunOptions
 from trackdyn.progress import progress_bar
 from trackdyn.results import make_dataset
 from trackdyn.solver import OUTPUTS, Problem, discrete, solve
 from trackdyn.solver.central import STEPS_PER_PERIOD, highest_frequency
+from trackdyn.solver.statics import widths
 from trackdyn.track.discrete import DiscreteTrack, discrete_track
 from trackdyn.track.inputs import ContactInput
 from trackdyn.track.track import RAILS, LinearisedTrack, Track
@@ -35,6 +36,13 @@ from trackdyn.vehicle.parameters import Vehicle
 OUTPUT_STEP = 1e-3
 """Output interval when ``store_every`` is None [s]: 1 kHz, well above the wheel-load
 frequencies of interest (body modes of 1-8 Hz, wheelset on track of 40-60 Hz)."""
+
+
+RUN_MEMORY_FACTOR = 2.5
+"""Memory of a run per byte of the arrays it stores [-]: the arrays, the Dataset made from
+them and what is written from it. Measured peaks of 11-DOF runs (`trackdyn run`) over 1,
+10 and 40 km: 0.90-1.02 kB per stored step beyond the 0.4 GB of a short run, 2.0-2.2 times
+its 456 B of arrays; 2.5 with a margin."""
 
 
 def time_step(
@@ -59,11 +67,13 @@ def time_step(
     return dt, 2.0 / omega, omega
 
 
-def _problem(vehicle, track, o: RunOptions) -> Problem:
+def _problem(vehicle, track, o: RunOptions, keep=OUTPUTS) -> Problem:
     """The solver's view of one run: model, track input, path, time step and storage.
 
     With ``o.track == "discrete"`` the input is a `DiscreteTrack` (given, or built from the
     linearised track) and the default step is also kept within the track's own stable step.
+    A run whose stored arrays (``keep``, `trackdyn.solver.OUTPUTS`; every one on the discrete
+    track) would not fit in memory is refused before it starts (`RUN_MEMORY_FACTOR`).
     """
     speed = o.speed
     m = build_model(o.model, vehicle)
@@ -111,8 +121,20 @@ def _problem(vehicle, track, o: RunOptions) -> Problem:
             f"time step dt_s = {dt:.3g} s gives {n_steps:.3g} steps over {c1 - c0:.1f} m at "
             f"{o.speed_kmh:g} km/h, more than the plausible {MAX_STEPS:.0e}"
         )
+    if o.store_every is not None and o.store_every >= n_steps:
+        raise TrackdynInputError(
+            f"store_every = {o.store_every} is not less than the run's {n_steps} steps: the "
+            "results would hold its first step only"
+        )
     store_every = o.store_every or max(1, round(OUTPUT_STEP / dt))
-    return Problem(m, inputs, c0, speed, dt, n_steps, store_every)
+    problem = Problem(m, inputs, c0, speed, dt, n_steps, store_every)
+    columns = widths(m)
+    kept = columns if o.track == "discrete" else {k: columns[k] for k in keep}
+    require_memory(
+        RUN_MEMORY_FACTOR * 8.0 * problem.n_store * sum(kept.values()),
+        f"a run over {c1 - c0:.4g} m ({problem.n_store:.3g} stored steps of {o.model})",
+    )
+    return problem
 
 
 @dataclass(frozen=True)
@@ -173,7 +195,7 @@ def run_batch(vehicles: list[Vehicle], tracks, options: list[RunOptions], *,
     made: list = []
     for v, trk, o in zip(vehicles, tracks, options, strict=True):
         try:
-            made.append(_problem(v, trk, o))
+            made.append(_problem(v, trk, o, keep))
         except TrackdynInputError as exc:
             made.append(exc)
     results: list = list(made)

@@ -170,8 +170,10 @@ def test_rate_field_is_seeded_lognormal(uniform):
 def test_bad_options(uniform):
     with pytest.raises(ValidationError, match="total_mgt"):  # the model's bound, as a file's
         options(total_mgt=-5.0)
+    with pytest.raises(ValidationError, match="total_mgt"):  # inf is no number of a table
+        options(total_mgt=np.inf)
     with pytest.raises(TrackdynInputError, match="total_mgt must be finite and > 0"):
-        predict(uniform, [LOADED], LAW, options(total_mgt=np.inf))
+        predict(uniform, [LOADED], LAW, options().model_copy(update={"total_mgt": np.inf}))
     with pytest.raises(TrackdynInputError, match="passages_per_mgt must be >= 0"):
         predict(uniform, [Traffic(LOADED.vehicle, 36.0, -1.0)], LAW, options())
     with pytest.raises(TrackdynInputError, match="no contact on the right rail"):

@@ -218,7 +218,7 @@ def test_bad_law_name_value_and_file(tmp_path):
         TrackdynInputError, match="unknown settlement parameter of the power law 'gamma'"
     ):
         load_law("power", gamma=1.0)
-    with pytest.raises(TrackdynInputError, match="cannot read the file"):
+    with pytest.raises(TrackdynInputError, match="missing.toml: no such file"):
         load_law("power", tmp_path / "missing.toml")
 
 

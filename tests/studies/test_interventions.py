@@ -200,7 +200,16 @@ BAD = {
         'name = "x"\ncolour = "red"', "study.toml: unknown key 'alternative.0.colour'"),
     "negative factor": (
         'name = "x"\nsupports_scale = [{ from_m = 21, to_m = 39, factor = -2 }]',
-        "study.toml: alternative.0.supports_scale.0.factor: Input should be greater than 0"),
+        "study.toml: alternative.0.supports_scale.0.factor: Input should be greater than or "
+        "equal to 0.01"),
+    "a factor of 1e9": (
+        'name = "x"\nsupports_scale = [{ from_m = 21, to_m = 39, factor = 1e9 }]',
+        "alternative.0.supports_scale.0.factor: Input should be less than or equal to 100"),
+    "a range from nan": (
+        'name = "x"\nsettlement_scale = [{ from_m = nan, to_m = 39, factor = 2 }]',
+        "alternative.0.settlement_scale.0.from_m: Input should be a finite number"),
+    "a cost of inf": ('name = "x"\ncost = inf', "alternative.0.cost: Input should be a finite"),
+    "a cost as text": ('name = "x"\ncost = "1000"', "alternative.0.cost: Input should be a valid"),
     "range outside the track": (
         'name = "x"\nsupports_scale = [{ from_m = 100, to_m = 150, factor = 2 }]',
         "study.toml: alternative 'x': supports_scale 100-150 m is outside section "

@@ -17,10 +17,15 @@ move to finish (a few renames), so a folder never holds half of a run; one that 
 after the move (while the command prints its summary) still exits 130 but leaves the
 finished outputs in place. A staging folder left by a process killed outright (SIGKILL)
 is removed by the next command writing there.
+
+A file system that fills up while the outputs are written ends the command in one line,
+``no space left on <folder>`` (`Status.NO_SPACE`): the staging folder is removed, the
+previous run's files stay as they were.
 """
 
 from __future__ import annotations
 
+import errno
 import hashlib
 import json
 import math
@@ -39,6 +44,11 @@ MANIFEST = ".trackdyn.json"
 
 SUMMARY = "summary.json"
 """File in an output folder describing the run (with a `Record`)."""
+
+FULL_BYTES = 1 << 20
+"""Free space [bytes] under which a failed write counts as a full file system: netCDF-4
+reports a write that ran out of space as ``NetCDF: HDF error``, without its errno, after
+filling the file system to its last blocks."""
 
 EXIT_INTERRUPTED = 130
 """Exit code after an interrupt (128 + SIGINT), as shells report it."""
@@ -227,6 +237,8 @@ def output_folder(
         _remove_stale_stages(out)
         stage = Path(tempfile.mkdtemp(prefix=f".staging-{os.getpid()}-", dir=out))
     except OSError as exc:
+        if _out_of_space(exc, out):
+            raise _no_space(out) from None
         raise TrackdynInputError(f"{flag} {out}: cannot write there ({exc.strerror})") from None
     if created:
         _cleanup.append(out)
@@ -246,14 +258,42 @@ def output_folder(
             (stage / SUMMARY).write_text(text + "\n")
             (stage / REPORT).write_text(render(summary, stage), encoding="utf-8")
         _commit(out, stage, command, previous)
-    except BaseException:
+    except BaseException as exc:
+        full = _out_of_space(exc, stage)  # before the staged files are removed
         shutil.rmtree(stage, ignore_errors=True)
         if created:
             shutil.rmtree(out, ignore_errors=True)
+        if full:
+            raise _no_space(out) from None
         raise
     finally:
         _cleanup[:] = [p for p in _cleanup if p not in (out, stage)]
         _records.pop(stage, None)
+
+
+def _out_of_space(exc: BaseException, folder: Path) -> bool:
+    """Whether ``exc``, raised while writing into ``folder``, says its file system is full:
+    an OSError of errno ENOSPC or EDQUOT, or netCDF's HDF error with less than
+    `FULL_BYTES` left there."""
+    if isinstance(exc, OSError):
+        return exc.errno in (errno.ENOSPC, errno.EDQUOT)
+    if isinstance(exc, RuntimeError) and "HDF error" in str(exc):
+        try:
+            return shutil.disk_usage(folder).free < FULL_BYTES
+        except OSError:
+            return False
+    return False
+
+
+def _no_space(out: Path):
+    """The failure of a command whose output folder ``out`` ran out of space."""
+    from trackdyn.errors import Status, TrackdynError
+
+    return TrackdynError(
+        f"no space left on {out}: nothing written there (the previous outputs, if any, are "
+        "kept); free some space or choose another --out",
+        Status.NO_SPACE,
+    )
 
 
 def _remove_stale_stages(out: Path) -> None:
@@ -278,14 +318,14 @@ def _running(pid: int) -> bool:
 def _commit(out: Path, stage: Path, command: str, previous: dict) -> None:
     """Move the staged files into ``out``, replacing the previous run's; interrupts wait."""
     names = sorted(p.name for p in stage.iterdir())
+    (stage / MANIFEST).write_text(json.dumps({"command": command, "files": names}))
     _state["committing"] = True
-    try:
+    try:  # renames only from here: nothing that can run out of space
         for name in previous.get("files", []):
             if name not in names and (out / name).is_file() and "/" not in name:
                 (out / name).unlink()
         for name in names:
             os.replace(stage / name, out / name)
-        (stage / MANIFEST).write_text(json.dumps({"command": command, "files": names}))
         os.replace(stage / MANIFEST, out / MANIFEST)
         stage.rmdir()
     finally:

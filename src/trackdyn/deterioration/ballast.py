@@ -63,6 +63,11 @@ MAX_RATE_COV = 3.0
 """Largest settlement-rate coefficient of variation accepted [-]: a typing error beyond
 (a percentage typed for a fraction), not a judgement on ballast."""
 
+MAX_RATE_CORRELATION_M = 1000.0
+"""Longest correlation length of the settlement-rate field accepted [m]: beyond, the field
+is uniform over any section and its smoothing kernel (8 correlation lengths of sleepers)
+outgrows the memory."""
+
 RAIL_CORRELATION = 0.7
 """Correlation of the left and right rails' rate fields [-]; illustrative, the value
 `trackdyn.track.synthetic.synthetic_track` uses for its stiffness fields."""
@@ -75,6 +80,21 @@ ignored."""
 MATCH_TOLERANCE = 0.25
 """Largest distance between a rail seat and its row of a rate-field file, as a fraction of
 the sleeper spacing [-]."""
+
+
+def check_rate_field(cov: float, correlation_length: float) -> None:
+    """Refuse a rate field's ``cov`` [-] or ``correlation_length`` [m] outside its
+    plausible range (`MAX_RATE_COV`, `MAX_RATE_CORRELATION_M`)."""
+    if not 0 <= cov <= MAX_RATE_COV:
+        raise TrackdynInputError(
+            f"rate_cov is {shown(cov)}, outside the plausible 0 to {MAX_RATE_COV:g} (a "
+            "coefficient of variation, not a percentage)"
+        )
+    if not 0 < correlation_length <= MAX_RATE_CORRELATION_M:
+        raise TrackdynInputError(
+            f"rate_correlation_length_m is {shown(correlation_length)} m, outside the "
+            f"plausible 0 to {MAX_RATE_CORRELATION_M:g} m"
+        )
 
 
 def rate_field(n: int, spacing: float, cov: float, correlation_length: float, seed,
@@ -106,15 +126,7 @@ def rate_field(n: int, spacing: float, cov: float, correlation_length: float, se
                 f"{len(RAILS)} rails x {n} sleepers)"
             )
         return factor
-    if not 0 <= cov <= MAX_RATE_COV:
-        raise TrackdynInputError(
-            f"rate_cov is {shown(cov)}, outside the plausible 0 to {MAX_RATE_COV:g} (a "
-            "coefficient of variation, not a percentage)"
-        )
-    if not 0 < correlation_length < np.inf:
-        raise TrackdynInputError(
-            f"rate_correlation_length_m must be > 0, got {shown(correlation_length)}"
-        )
+    check_rate_field(cov, correlation_length)
     rng = np.random.default_rng(seed)
     common = correlated_field(n, spacing, correlation_length, rng)
     c = RAIL_CORRELATION
@@ -139,7 +151,8 @@ def read_rate_field(path, position) -> np.ndarray:
     position : ndarray
         Sleeper positions of the track [m].
     """
-    return _rate_field_of(read_table(path, RATE_FIELD_COLUMNS), position, path)
+    return _rate_field_of(read_table(path, RATE_FIELD_COLUMNS, ("standard_error",)),
+                          position, path)
 
 
 def read_field_draws(path, position) -> np.ndarray:
@@ -166,7 +179,7 @@ def _rate_field_of(frame, position, path) -> np.ndarray:
     """`read_rate_field` of the rows ``frame`` read from ``path``."""
     distance = pd.to_numeric(frame.distance_m, errors="coerce").to_numpy()
     factor = pd.to_numeric(frame.factor, errors="coerce").to_numpy()
-    rail = frame.rail.str.strip().to_numpy()
+    rail = frame.rail.str.strip().str.lower().to_numpy()
     bad = ~(np.isfinite(distance) & np.isfinite(factor) & (factor > 0) & (factor <= MAX_FACTOR))
     bad |= ~np.isin(rail, RAILS)
     if bad.any():
@@ -180,11 +193,17 @@ def _rate_field_of(frame, position, path) -> np.ndarray:
     tolerance = MATCH_TOLERANCE * float(np.median(np.diff(position)))
     out = np.empty((len(RAILS), position.size))
     for r, name in enumerate(RAILS):
-        x, f = distance[rail == name], factor[rail == name]
-        order = np.argsort(x)
-        x, f = x[order], f[order]
+        rows = np.flatnonzero(rail == name)
+        rows = rows[np.argsort(distance[rows], kind="stable")]
+        x, f = distance[rows], factor[rows]
         if x.size == 0:
             raise TrackdynInputError(f"{path}: no rows for the {name} rail")
+        again = np.flatnonzero(np.diff(x) == 0)
+        if again.size:
+            a, b = sorted(frame.index[rows[again[0] : again[0] + 2]] + 2)
+            raise TrackdynInputError(
+                f"{path}: lines {a} and {b} both give the {name} rail at {x[again[0]]:g} m"
+            )
         after = np.clip(np.searchsorted(x, position), 0, x.size - 1)  # the nearest row:
         before = np.maximum(after - 1, 0)  # the one at or after, or the one before
         j = np.where(np.abs(x[before] - position) <= np.abs(x[after] - position), before, after)

@@ -75,7 +75,13 @@ from trackdyn.deterioration.loads import TrafficRun, rail_seat_loads
 from trackdyn.deterioration.maintenance import Maintenance
 from trackdyn.deterioration.options import LoopOptions
 from trackdyn.deterioration.quality import d1_sd
-from trackdyn.deterioration.record import LoopRecord, StepRecord, Timing, TrackState
+from trackdyn.deterioration.record import (
+    LoopRecord,
+    StepRecord,
+    Timing,
+    TrackState,
+    require_loop_memory,
+)
 from trackdyn.deterioration.results import make_dataset
 from trackdyn.deterioration.starts import STARTS, surveyed_geometry, tamped_geometry
 from trackdyn.deterioration.zones import check_zones
@@ -233,6 +239,7 @@ class SectionLoop:
         self.limit = o.max_step_settlement
         every = float(require_positive("snapshot_every_mgt", o.snapshot_every_mgt))
         require_positive("min_step_passages", o.min_step_passages)
+        require_loop_memory(track, len(traffic), o, self.total)
         track, seg_start, seg_end = _start_state(track, o)
         self.track = track
         pos = self.position = track.supports.position
@@ -444,9 +451,12 @@ class SectionLoop:
 
 def _start_state(track: Track, o: LoopOptions):
     """The section in the start state of ``o.start`` (`trackdyn.deterioration.starts`),
-    checked to hold a whole segment, and the segments' starts and ends [m]."""
-    length = track.extent[1] - track.extent[0]
-    if o.segment_length > length:
+    checked to hold a whole segment, and the segments' starts and ends [m]. The section is
+    as long as its sleepers reach, half a spacing beyond the first and the last (a 300 m
+    section's sleepers 0.6 m apart span 299.4 m)."""
+    spacing = float(np.median(np.diff(track.supports.position)))
+    length = track.extent[1] - track.extent[0] + spacing
+    if o.segment_length > length * (1 + 1e-9):
         raise TrackdynInputError(
             f"segment_length_m = {o.segment_length:g} m is longer than the track "
             f"({length:g} m); the D1 SD needs at least one whole segment"

@@ -72,18 +72,11 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from pydantic import (
-    Field,
-    NonNegativeFloat,
-    NonNegativeInt,
-    PositiveFloat,
-    PositiveInt,
-    field_validator,
-    model_validator,
-)
+from pydantic import ConfigDict, Field, field_validator, model_validator
 from scipy.optimize import brentq
 
 from trackdyn.deterioration.quality import D1Assessment
+from trackdyn.limits import MAX_TOTAL_MGT
 from trackdyn.options import Strict
 from trackdyn.track.quality import longitudinal_level
 from trackdyn.track.track import RAILS
@@ -96,6 +89,9 @@ and the rail-seat load updates within the step move it a little."""
 
 class MaintenanceOptions(Strict):
     """The ``[maintenance]`` table: policy and tamping model (units in the names).
+
+    Each value has a plausible range (its field's bounds, wide: beyond them a typing error
+    or a wrong unit), numbers are numbers (not text), ``inf`` and ``nan`` are refused.
 
     Parameters
     ----------
@@ -144,22 +140,24 @@ class MaintenanceOptions(Strict):
         Seed of the irregularity each tamping leaves.
     """
 
+    model_config = ConfigDict(strict=True)  # "5" is no number
+
     policy: str = "threshold"
-    interval_mgt: PositiveFloat | None = None
-    min_interval_mgt: NonNegativeFloat = 5.0
-    neighbours: NonNegativeInt = 0
+    interval_mgt: float | None = Field(None, ge=0.1, le=MAX_TOTAL_MGT)
+    min_interval_mgt: float = Field(5.0, ge=0.0, le=MAX_TOTAL_MGT)
+    neighbours: int = Field(0, ge=0, le=100)
     alert_fraction: float = Field(0.9, gt=0.0, le=1.0)
-    max_tampings: PositiveInt = 6
-    recovery_offset_mm: NonNegativeFloat = 0.6
+    max_tampings: int = Field(6, ge=1, le=1000)
+    recovery_offset_mm: float = Field(0.6, ge=0.0, le=5.0)
     recovery_slope: float = Field(0.3, ge=0.0, le=1.0)
     kept_correlation: float = Field(0.5, ge=0.0, le=1.0)
-    run_out_m: NonNegativeFloat = 10.0
-    general_lift_mm: NonNegativeFloat = 10.0
-    consolidated_mgt: NonNegativeFloat = 10.0
-    lift_reference_mm: PositiveFloat = 40.0
-    loosening_mgt: PositiveFloat = 3.0
-    damage_per_tamping: NonNegativeFloat = 0.1
-    seed: NonNegativeInt = 0
+    run_out_m: float = Field(10.0, ge=0.0, le=100.0)
+    general_lift_mm: float = Field(10.0, ge=0.0, le=200.0)
+    consolidated_mgt: float = Field(10.0, ge=0.0, le=1000.0)
+    lift_reference_mm: float = Field(40.0, ge=1.0, le=1000.0)
+    loosening_mgt: float = Field(3.0, gt=0.0, le=1000.0)
+    damage_per_tamping: float = Field(0.1, ge=0.0, le=1.0)
+    seed: int = Field(0, ge=0)
 
     @field_validator("policy")
     @classmethod

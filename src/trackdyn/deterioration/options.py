@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from pydantic import ConfigDict, Field
 
 from trackdyn.deterioration.maintenance import MaintenanceOptions
+from trackdyn.limits import MAX_TOTAL_MGT
 from trackdyn.options import RunOptions, Strict
 from trackdyn.vehicle.models import build_model
 from trackdyn.vehicle.parameters import Vehicle
@@ -49,6 +50,9 @@ class Traffic:
         return build_model(model, self.vehicle).gross_mass
 
 
+MIN_SEGMENT_M = 25.0
+"""Shortest segment of the D1 standard deviation [m]: the D1 band's longest wavelength."""
+
 LOOP_TABLE = "loop"
 """Marker of the `LoopOptions` fields that are keys of a scenario file's ``[loop]`` table."""
 
@@ -59,7 +63,7 @@ def loop_key(default, **bounds):
 
 
 class LoopOptions(Strict):
-    """Options of the deterioration loop; each default lives here.
+    """Options of the deterioration loop; each default and plausible range lives here.
 
     The names are those of the scenario files, with their unit suffix (``_mm``, ``_m``,
     ``_kg``); the options the loop uses in SI are properties of the name without the
@@ -137,12 +141,12 @@ class LoopOptions(Strict):
 
     model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
 
-    total_mgt: float = loop_key(50.0, gt=0)
-    max_step_settlement_mm: float = loop_key(1.0, gt=0)
+    total_mgt: float = loop_key(50.0, gt=0, le=MAX_TOTAL_MGT)
+    max_step_settlement_mm: float = loop_key(1.0, ge=0.01, le=10.0)
     snapshot_every_mgt: float = loop_key(10.0, gt=0)
-    threshold_sd_mm: float = loop_key(1.6, gt=0)
-    segment_length_m: float = loop_key(200.0, gt=0)
-    max_steps: int = loop_key(1000, gt=0)
+    threshold_sd_mm: float = loop_key(1.6, gt=0, le=20.0)
+    segment_length_m: float = loop_key(200.0, ge=MIN_SEGMENT_M)
+    max_steps: int = loop_key(1000, gt=0, le=100_000)
     rate_cov: float = 0.3
     rate_correlation_length_m: float = 3.0
     seed: int | tuple[int, ...] = 0
@@ -154,7 +158,7 @@ class LoopOptions(Strict):
     output_spacing_m: float = 0.02
     start: str = "as measured"
     snapshot_mgt: tuple[float, ...] = ()
-    min_step_passages: float = loop_key(100.0, gt=0)
+    min_step_passages: float = loop_key(100.0, gt=0, le=1e6)
     maintenance: MaintenanceOptions | None = None
 
     @property

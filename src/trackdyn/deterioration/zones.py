@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from trackdyn.deterioration.ballast import check_rate_field
 from trackdyn.errors import TrackdynInputError, shown, unknown
 from trackdyn.io import read_table
 
@@ -133,7 +134,7 @@ def read_zones(path, load) -> list[Zone]:
         kind.
     """
     path = Path(path)
-    frame = read_table(path, ("start_m", "end_m", "kind"))
+    frame = read_table(path, ("start_m", "end_m", "kind"), OPTIONAL)
     extra = [c for c in frame.columns if c not in ("start_m", "end_m", "kind", *OPTIONAL)]
     if extra:
         raise unknown("column", extra[0], ("start_m", "end_m", "kind", *OPTIONAL), f"{path}: ")
@@ -161,11 +162,12 @@ def read_zones(path, load) -> list[Zone]:
             length = _number(value.get("rate_correlation_length_m") or "3",
                              "rate_correlation_length_m", line)  # fmt: skip
             seed = _number(value.get("seed") or "0", "seed", line)
-            if cov < 0 or length <= 0 or seed < 0 or seed != int(seed):
-                raise TrackdynInputError(
-                    f"{line}: needs rate_cov >= 0, rate_correlation_length_m > 0 and a "
-                    "whole seed >= 0"
-                )
+            if seed < 0 or seed != int(seed):
+                raise TrackdynInputError(f"{line}: seed must be a whole number >= 0")
+            try:
+                check_rate_field(cov, length)
+            except TrackdynInputError as exc:
+                raise TrackdynInputError(f"{line}: {exc}") from None
             rate = RateField(cov, length, int(seed))
         zones.append(Zone(start, end, kind, law, rate))
     return zones

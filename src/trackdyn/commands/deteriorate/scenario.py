@@ -86,7 +86,7 @@ from pydantic import (
 from trackdyn.deterioration.maintenance import MaintenanceOptions
 from trackdyn.deterioration.options import LoopOptions
 from trackdyn.errors import TrackdynInputError
-from trackdyn.limits import MAX_SPEED_KMH
+from trackdyn.limits import MAX_SPEED_KMH, MAX_TOTAL_MGT
 from trackdyn.options import RunOptions, Strict, load_toml, vehicle_source
 
 
@@ -178,8 +178,8 @@ class MaintenanceSpec(MaintenanceOptions):
     """``[maintenance]``: the `MaintenanceOptions`, and optionally the horizon as
     ``horizon_years`` [years] of ``annual_mgt`` [MGT/year] instead of ``[loop] total_mgt``."""
 
-    horizon_years: PositiveFloat | None = None
-    annual_mgt: PositiveFloat | None = None
+    horizon_years: float | None = Field(None, gt=0.0, le=200.0)
+    annual_mgt: float | None = Field(None, gt=0.0, le=1000.0)
 
     @model_validator(mode="after")
     def _both_or_neither(self):
@@ -261,6 +261,24 @@ class DeteriorationScenario(Strict):
         if growing and (m is None or m.horizon_years is None):
             raise ValueError("forecast annual_growth needs the horizon in years: [maintenance] "
                              "horizon_years and annual_mgt")  # fmt: skip
+        return self
+
+    @model_validator(mode="after")
+    def _reachable(self):
+        m, loop, total = self.maintenance, self.loop, self.horizon_mgt
+        if m is not None and m.horizon_years is not None and total > MAX_TOTAL_MGT:
+            raise ValueError(f"horizon_years x annual_mgt is {total:g} MGT, outside the "
+                             f"plausible 0 to {MAX_TOTAL_MGT:g} MGT")  # fmt: skip
+        if m is None:
+            return self
+        if loop.threshold_sd_mm <= m.recovery_offset_mm:
+            raise ValueError(f"[loop] threshold_sd_mm = {loop.threshold_sd_mm:g} mm is not above "
+                             f"[maintenance] recovery_offset_mm = {m.recovery_offset_mm:g} mm, "
+                             "the least D1 SD a tamping leaves: it could never bring a "
+                             "segment under the threshold")  # fmt: skip
+        if m.policy == "fixed" and m.interval_mgt is not None and m.interval_mgt > total:
+            raise ValueError(f"[maintenance] interval_mgt = {m.interval_mgt:g} MGT is beyond "
+                             f"the horizon of {total:g} MGT: no tamping would happen")  # fmt: skip
         return self
 
     @model_validator(mode="after")

@@ -26,8 +26,9 @@ from trackdyn.deterioration.zones import read_zones
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import read_table
 
-NAME = re.compile(r"^[A-Za-z0-9_.-]+$")
-"""Section names become parts of file names."""
+NAME = re.compile(r"^[A-Za-z0-9_.-]*[A-Za-z0-9][A-Za-z0-9_.-]*$")
+"""Section names become parts of file names: letters, digits, ``_``, ``-`` and ``.``, with
+at least one letter or digit (not ``..``)."""
 
 
 def read_sections(path) -> list[Section]:
@@ -40,7 +41,7 @@ def read_sections(path) -> list[Section]:
         The CSV file.
     """
     path = Path(path)
-    frame = read_table(path, ("name", "geometry", "supports"))
+    frame = read_table(path, ("name", "geometry", "supports"), ("zones",))
     sections, seen = [], set()
     for i, row in enumerate(frame.itertuples(index=False)):
         line = f"{path}: line {i + 2}"
@@ -48,7 +49,7 @@ def read_sections(path) -> list[Section]:
         if not NAME.match(name) or name in seen:
             raise TrackdynInputError(
                 f"{line}: section name {name!r} is empty, repeated or not made of "
-                "letters, digits, '_', '-' and '.'"
+                "letters, digits, '_', '-' and '.' (with a letter or digit)"
             )
         seen.add(name)
         files: list[str | None] = []

@@ -35,7 +35,14 @@ from typing import Literal
 
 import numpy as np
 import pandas as pd
-from pydantic import Field, NonNegativeFloat, PositiveFloat, StrictFloat, model_validator
+from pydantic import (
+    ConfigDict,
+    Field,
+    NonNegativeFloat,
+    PositiveFloat,
+    StrictFloat,
+    model_validator,
+)
 
 from trackdyn.commands.deteriorate.forecast import plan_forecast
 from trackdyn.commands.deteriorate.outputs import life_cycle_table
@@ -60,6 +67,10 @@ from trackdyn.studies.interventions import (
     support_extent,
 )
 
+MIN_SCALE, MAX_SCALE = 0.01, 100.0
+"""Plausible range of a ``supports_scale`` or ``settlement_scale`` factor [-]: a hundredth
+to a hundred times the track's stiffness or settlement rate."""
+
 
 class RangeScale(Strict):
     """One range of ``supports_scale`` (support stiffness) or ``settlement_scale``
@@ -68,9 +79,11 @@ class RangeScale(Strict):
     1 (a transition treatment), ``"none"`` (default) holds it over the range
     (`trackdyn.studies.interventions.RAMPS`)."""
 
+    model_config = ConfigDict(strict=True)  # "5" is no number
+
     from_m: float
     to_m: float
-    factor: PositiveFloat
+    factor: float = Field(ge=MIN_SCALE, le=MAX_SCALE)
     section: str | None = None
     ramp: Literal["none", "up", "down"] = "none"
 
@@ -84,6 +97,8 @@ class RangeScale(Strict):
 class Alternative(Strict):
     """``[[alternative]]``: a ``name``, its ``cost`` and the changes it makes."""
 
+    model_config = ConfigDict(strict=True)
+
     name: str = Field(pattern=NAME.pattern)
     cost: NonNegativeFloat = 0.0
     supports_scale: list[RangeScale] = Field(default_factory=list)
@@ -95,6 +110,8 @@ class Alternative(Strict):
 
 class Costs(Strict):
     """``[costs]``: ``tamping_per_m`` and ``renewal_per_m`` (the user's currency per m)."""
+
+    model_config = ConfigDict(strict=True)
 
     tamping_per_m: NonNegativeFloat = 0.0
     renewal_per_m: NonNegativeFloat = 0.0
