@@ -304,9 +304,10 @@ def test_cost_spread_in_closed_form():
 
 
 def test_a_forecast_scenario_gives_each_alternatives_cost_spread(folder, tmp_path):
-    """With ``[forecast]`` (3 members, the Sato law's gamma lognormal cov 0.3), every alternative runs on
-    every member; the spread file's quantiles are those of the members' own costs, which
-    are the life-cycle costs of each member run alone (`member_tasks` then `compare`)."""
+    """With ``[forecast]`` (3 members, the Sato law's gamma lognormal cov 0.3), every
+    alternative runs on every member; the spread file's quantiles are those of the members'
+    own costs, which are the life-cycle costs of each member run alone (`member_tasks` then
+    `compare`)."""
     from trackdyn.commands.deteriorate.forecast import plan_forecast
     from trackdyn.commands.interventions import compare
     from trackdyn.forecast.ensemble import member_tasks
