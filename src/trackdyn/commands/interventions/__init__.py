@@ -232,6 +232,9 @@ def alternative_tasks(study: InterventionsStudy, path, folder: Path):
     spec, base = load_deterioration(scenario_path)
     if spec.maintenance is None:
         raise TrackdynInputError(f"{scenario_path}: no [maintenance] table: nothing to compare")
+    if spec.plan is not None:
+        raise TrackdynInputError(f"{scenario_path}: [plan] is trackdyn deteriorate's; an "
+                                 "interventions study compares without it")  # fmt: skip
     tasks = []
     for alt in study.alternative:
         where = f"{path}: alternative {alt.name!r}"
