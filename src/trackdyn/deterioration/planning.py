@@ -74,7 +74,7 @@ class Rules:
     per_possession: float = 0.0
 
     def cost(self, length: float) -> float:
-        """Cost of tamping one stretch of ``length`` [m] [currency]."""
+        """Cost of tamping one stretch ``length`` metres long [currency]."""
         return self.tamping_per_m * length + self.per_possession
 
 
