@@ -20,7 +20,8 @@ the Dataset the command goes on to plot:
   in a unit (``dyn_load_sd_kN``, ``tamped_m_per_100_mgt``), its ``units``, read whole from
   the name by the unit registry (`trackdyn.units.name_unit`); every ``units`` is parsed by
   the registry and written in UDUNITS spelling (`trackdyn.units.udunits`: ``MGT``, million
-  gross tonnes, as ``Mt``);
+  gross tonnes, as ``Mt``), except a cost's: a variable whose ``currency`` attribute
+  names one (`trackdyn.units.currency`) has it as its ``units`` (UDUNITS has no currency);
 - the time axis of a run is written as ``run_time``: CF reads a variable named ``time`` as
   calendar time, which needs a reference date that a simulation has not;
 - the attributes that say how long parts of the computation took (`WALL_CLOCK`) are left
@@ -40,7 +41,7 @@ from __future__ import annotations
 import numpy as np
 
 from trackdyn.commands.staging import record_of
-from trackdyn.units import name_unit, udunits
+from trackdyn.units import currency, name_unit, udunits
 
 CONVENTIONS = "CF-1.8"
 RENAMED = {"time": "run_time"}
@@ -68,9 +69,13 @@ def _describe(var, name: str) -> None:
     """Give ``var`` a long_name and CF units (in place, on the file's copy)."""
     stem, unit = name_unit(name)
     attrs = var.attrs
-    if "units" not in attrs and unit is not None and var.dtype.kind in "fiu":
+    code = attrs.pop("currency", None)
+    if code is not None:
+        attrs["units"] = currency(str(code))
+        stem = name.removesuffix(f"_{code}")
+    elif "units" not in attrs and unit is not None and var.dtype.kind in "fiu":
         attrs["units"] = unit
-    if "units" in attrs:
+    if "units" in attrs and code is None:
         attrs["units"] = udunits(str(attrs["units"]))
     if "long_name" not in attrs:
         attrs["long_name"] = stem.replace("_", " ")
