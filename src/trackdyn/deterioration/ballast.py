@@ -151,8 +151,7 @@ def read_rate_field(path, position) -> np.ndarray:
     position : ndarray
         Sleeper positions of the track [m].
     """
-    return _rate_field_of(read_table(path, RATE_FIELD_COLUMNS, ("standard_error",)),
-                          position, path)
+    return _rate_field_of(read_table(path, RATE_FIELD_COLUMNS, ("standard_error",)), position, path)
 
 
 def read_field_draws(path, position) -> np.ndarray:
