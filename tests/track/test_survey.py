@@ -41,8 +41,15 @@ def test_a_profile_reads_as_before_without_notes(tmp_path):
     g = read_geometry(true_file(tmp_path))
     np.testing.assert_allclose(g.left, TRUE.geometry.left, rtol=1e-8, atol=1e-12)  # %.9g
     assert g.notes == ()
-    shipped = read_geometry(example_path(EXAMPLE_GEOMETRY))  # the shipped example: quiet
-    assert shipped.notes == ()
+
+
+def test_every_shipped_profile_is_read_without_a_note():
+    # the built-in section and the calibration example's surveys: no gap, no check fires
+    package = example_path(EXAMPLE_GEOMETRY).parents[1]
+    files = [example_path(EXAMPLE_GEOMETRY), *package.glob("examples/calibration/survey_*.csv")]
+    assert len(files) == 4
+    for path in files:
+        assert read_geometry(path).notes == ()
 
 
 @pytest.mark.parametrize(("kind", "beyond"), [("d1", "25 m"), ("d1d2", "70 m")])
@@ -184,4 +191,4 @@ def test_a_run_on_a_d1_file_says_what_is_missing(tmp_path):
     assert "D1 longitudinal level taken as the profile" in result.stderr  # shown with -q
     options = json.loads((tmp_path / "o" / "summary.json").read_text())["options"]
     assert options["track_geometry_kind"] == "d1"
-    assert "beyond 25 m" in options["geometry_kind"]
+    assert "beyond 25 m" in options["geometry_note_kind"]

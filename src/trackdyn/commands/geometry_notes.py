@@ -1,18 +1,17 @@
 """What a command tells of the geometry it read: `Geometry.notes` on stderr and in its
-record (``summary.json`` and the netCDF files' ``option_geometry_<topic>`` attributes)."""
+record (``summary.json`` and the netCDF files' ``option_geometry_note_<topic>``
+attributes)."""
 
 from __future__ import annotations
 
 from trackdyn.progress import note
-
-PREFIX = "geometry_"
-"""Start of the record options and Dataset attributes that hold a geometry's notes."""
+from trackdyn.track.survey import NOTE_PREFIX as PREFIX
 
 
 def geometry_notes(notes, source: str, options: dict | None = None) -> None:
     """Show each note (``(topic, text)`` pairs of `Geometry.notes`) on stderr, even with
     ``-q`` (they say what the profile lacks), and put it into ``options`` as
-    ``geometry_<topic>``.
+    ``geometry_note_<topic>``.
 
     Parameters
     ----------

@@ -19,7 +19,7 @@ from trackdyn.deterioration.results import make_dataset
 from trackdyn.deterioration.settlement import SettlementLaw
 from trackdyn.deterioration.zones import check_zones
 from trackdyn.errors import Failure
-from trackdyn.track.survey import GeometryFormat
+from trackdyn.track.survey import NOTE_PREFIX, GeometryFormat
 
 
 @dataclass(frozen=True)
@@ -135,7 +135,7 @@ def run_group(tasks: list[SectionTask]) -> list:
         else:
             ds = results[i] = make_dataset(out)
             ds.attrs["section"] = name
-            ds.attrs.update({f"geometry_{topic}": text for topic, text in notes[i]})
+            ds.attrs.update({NOTE_PREFIX + topic: text for topic, text in notes[i]})
     return results
 
 

@@ -53,6 +53,9 @@ header, above 30 mm no track the model means (millimetres under a ``_m`` header)
 FLAT_SD_MM = 1e-6
 """D1 standard deviation below which a profile is flat (a test track), taken as it is [mm]."""
 
+NOTE_PREFIX = "geometry_note_"
+"""Start of the names under which outputs hold `Geometry.notes` (``geometry_note_kind``)."""
+
 KINDS = ("profile", "d1", "d1d2", "versine")
 """What a geometry file's ``left``/``right`` columns hold (`GeometryFormat.geometry_kind`)."""
 
