@@ -56,9 +56,6 @@ FLAT_SD_MM = 1e-6
 NOTE_PREFIX = "geometry_note_"
 """Start of the names under which outputs hold `Geometry.notes` (``geometry_note_kind``)."""
 
-KINDS = ("profile", "d1", "d1d2", "versine")
-"""What a geometry file's ``left``/``right`` columns hold (`GeometryFormat.geometry_kind`)."""
-
 FILTERED = {"d1": WAVEBANDS["D1"], "d1d2": (WAVEBANDS["D1"][0], WAVEBANDS["D2"][1])}
 """Wavelengths [m] a filtered longitudinal level holds, by kind."""
 
