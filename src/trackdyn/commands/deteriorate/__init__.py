@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 
+from trackdyn.commands.geometry_notes import PREFIX, geometry_notes
 from trackdyn.commands.staging import Record, output_folder
 from trackdyn.commands.tables import deterioration_table, forecast_table, frame_table
 from trackdyn.errors import require_workers
@@ -54,6 +55,10 @@ def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> 
         plan = plan_forecast(spec, base, tasks)
     with output_folder(out, "deteriorate", overwrite, record) as stage:
         datasets = run_sections(tasks, workers=workers, scheduler=scheduler, progress=not serial)
+        for ds in datasets:
+            attrs = ds.attrs.items()
+            told = ((k.removeprefix(PREFIX), v) for k, v in attrs if k.startswith(PREFIX))
+            geometry_notes(told, f"section {ds.attrs['section']}")
         record.headline = {"sections": summary(datasets).to_dict(orient="records")}
         files = write_outputs(datasets, stage)
         forecast = table = None

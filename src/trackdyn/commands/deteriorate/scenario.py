@@ -100,6 +100,7 @@ from trackdyn.deterioration.options import LoopOptions
 from trackdyn.errors import TrackdynInputError
 from trackdyn.limits import MAX_SPEED_KMH, MAX_TOTAL_MGT
 from trackdyn.options import RunOptions, Strict, load_toml, vehicle_source
+from trackdyn.track.survey import GeometryFormat
 
 
 def _default(name: str):
@@ -161,12 +162,13 @@ class SettlementSpec(Strict):
         return value
 
 
-class TrackSectionsSpec(Strict):
+class TrackSectionsSpec(GeometryFormat):
     """``[track]``: ``geometry`` and ``supports`` CSV files, or a ``sections`` CSV list;
     ``zones``, a zone table (`trackdyn.deterioration.zones`; in a sections list, its
     ``zones`` column); ``rail`` section for the bending stiffness EI; ``start``, ``"tamped"``, ``"as
     measured"`` or ``"as surveyed"`` (default: tamped for the built-in example, as
-    measured for files)."""
+    measured for files); what the geometry files hold (`trackdyn.track.survey.GeometryFormat`,
+    the same for every section of a list)."""
 
     geometry: Path | None = None
     supports: Path | None = None
