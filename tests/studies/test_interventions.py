@@ -123,6 +123,7 @@ def test_fixing_the_soft_spot_delays_and_does_not_add_tampings(compared):
 
 def test_costs_add_up(compared):
     table = pd.read_csv(compared / "interventions_compared.csv").set_index("alternative")
+    segments = pd.read_csv(compared / "interventions_segments.csv")
     for name, row in table.iterrows():
         # every segment is 60 m long (segment_length_m) and costs 10 per m tamped, 100 renewed
         # (the study's [costs], no currency given: "cu"); undiscounted, no possession cost
@@ -130,11 +131,20 @@ def test_costs_add_up(compared):
         assert row["tamping_cost_cu"] == pytest.approx(10.0 * 60.0 * row["tampings"])
         assert row["renewal_cost_cu"] == pytest.approx(100.0 * 60.0 * row["renewals"])
         assert row["intervention_cost_cu"] == {"base": 0.0, "spot-fixed": 1000.0}[name]
-        # the residual: a tamping (10 per m) of every metre at the threshold at the horizon
-        assert row["residual_cost_cu"] == pytest.approx(10.0 * row["needs_work_m"])
+        # the residual (the condition rule): 10 per m times each segment's used share of its
+        # length (the CSVs' 6 significant digits)
+        mine = segments[segments.alternative == name]
+        share = mine.residual_share.to_numpy()
+        length = (mine.segment_end_m - mine.segment_start_m).to_numpy()
+        assert row["residual_cost_cu"] == pytest.approx(10.0 * (length * share).sum(), rel=1e-5)
+        # the share in closed form: (σ_h - σ_t) / (σ_ref - σ_t), σ_ref the 0.12 mm threshold,
+        # σ_t = 0.05 + 0.3 x 0.12 mm, the scenario's tamping model at the reference
+        tamped = 0.05 + 0.3 * 0.12
+        expected = np.clip((mine.d1_sd_horizon_mm - tamped) / (0.12 - tamped), 0.0, 1.0)
+        np.testing.assert_allclose(share, expected, atol=1e-4)  # σ_h: 6 digits, x 1/0.034
         parts = (row["tamping_cost_cu"] + row["renewal_cost_cu"] + row["intervention_cost_cu"]
                  + row["residual_cost_cu"])  # fmt: skip
-        assert row["life_cycle_cost_cu"] == pytest.approx(parts)
+        assert row["life_cycle_cost_cu"] == pytest.approx(parts, rel=1e-5)  # 6 digits each
     assert {"interventions_compared.nc", "interventions_compared.png"} <= {
         p.name for p in compared.iterdir()
     }
@@ -169,7 +179,7 @@ threshold_sd_mm = 5.0
 def test_deferring_is_no_longer_free(folder, tmp_path):
     """The constructed case: over 7 MGT the base tamps the soft spot's 60 m segment once
     (at 5.5 MGT, the threshold 0.12 mm; measured) and ends under the threshold; ``later``
-    tamps nothing and leaves that segment over it. The residual rule charges ``later`` that
+    tamps nothing and leaves that segment over it. The end-state rule charges ``later`` that
     segment's tamping at the horizon: 60 m x 10 per m + one possession of 100, the base's
     own tamping and possession (600 + 100); without it, ``later`` would cost nothing."""
     from trackdyn.commands.interventions import compare
@@ -177,7 +187,8 @@ def test_deferring_is_no_longer_free(folder, tmp_path):
     for name in ("geometry.csv", "supports.csv"):
         (tmp_path / name).write_bytes((folder / name).read_bytes())
     (tmp_path / "scenario.toml").write_text(SCENARIO.replace("total_mgt = 8", "total_mgt = 7"))
-    study = STUDY.replace("renewal_per_m = 100.0", "renewal_per_m = 100.0\nper_possession = 100")
+    study = STUDY.replace("renewal_per_m = 100.0", "renewal_per_m = 100.0\nper_possession = 100"
+                          '\nresidual = "end-state work"')  # fmt: skip
     (tmp_path / "study.toml").write_text(study + LATER)
     out = tmp_path / "out"
     args = ["study", str(tmp_path / "study.toml"), "--out", str(out), "--workers", "1"]
@@ -389,5 +400,7 @@ def test_a_forecast_scenario_gives_each_alternatives_cost_spread(folder, tmp_pat
         each.append(table.set_index("alternative").life_cycle_cost_cu)
     costs = pd.concat(each, axis=1)
     for name in ("base", "spot-fixed"):
-        assert spread.loc[name, "life_cycle_cost_p50_cu"] == sorted(costs.loc[name])[1]
-        assert spread.loc[name, "life_cycle_cost_mean_cu"] == pytest.approx(costs.loc[name].mean())
+        # the file's 6 significant digits
+        p50, mean = sorted(costs.loc[name])[1], costs.loc[name].mean()
+        assert spread.loc[name, "life_cycle_cost_p50_cu"] == pytest.approx(p50, rel=1e-5)
+        assert spread.loc[name, "life_cycle_cost_mean_cu"] == pytest.approx(mean, rel=1e-5)

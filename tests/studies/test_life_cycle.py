@@ -79,6 +79,21 @@ def test_the_end_state_owes_the_tamping_of_what_reached_the_reference():
     assert costs(discounted_work(ds, Rates(tamping_per_m=10.0)), Rates())["residual_cost"] == 0
 
 
+def test_the_condition_rule_charges_the_share_of_a_tamping_used():
+    """The same section, the condition rule with σ_t = 1.2 mm (0.6 + 0.3 x 2 mm): segment
+    shares (1.0 - 1.2)/0.8 -> 0, (2.0 - 1.2)/0.8 = 1, 1 (over the reference), (1.9 -
+    1.2)/0.8 = 0.875; residual 50 m x (0 + 1 + 1 + 0.875) = 143.75 m at 10 per m plus the
+    one possession of the run that needs work (segments 1-2)."""
+    ds = section([(21.0, 3, "tamping")], [1.0, 2.0, 2.5, 1.9])
+    end = end_state(ds, 2.0, 1.2)
+    np.testing.assert_allclose(end.residual_share, [0.0, 1.0, 1.0, 0.875], rtol=1e-12)
+    rates = Rates(tamping_per_m=10.0, per_possession=100.0, reference_sd_mm=2.0,
+                  tamped_sd_mm=1.2)  # fmt: skip
+    work = discounted_work(ds, rates)
+    assert work["residual_m"] == pytest.approx(143.75) and work["residual_possessions"] == 1.0
+    assert costs(work, rates)["residual_cost"] == pytest.approx(1537.5)
+
+
 def test_discounted_costs_of_a_known_stream():
     """A tamping of 50 m at 10 MGT and a renewal of 50 m at 20 MGT, 10 MGT/year, 5 %; the
     residual of segment 2 at the horizon (30 MGT, year 3); the intervention in year 1."""

@@ -16,6 +16,15 @@ the discounting of the years it was deferred. What the rule does not charge: a s
 just under the reference at the horizon owes nothing (a lower reference, e.g. the alert
 limit, charges it), and no credit is given for the unused life of a recent tamping.
 
+**Residual rule: the condition used.** With ``tamped_sd_mm``, the D1 SD a tamping leaves
+a segment at the reference in (``recovery_offset_mm + recovery_slope × reference``, the
+scenario's tamping model), every segment is charged the share of a tamping its condition
+has used since: ``(σ_h - σ_t) / (σ_ref - σ_t)`` of its length at the cost per metre
+tamped, between 0 (as tamped) and 1 (at the reference, when it also owes the
+possession): straight-line depreciation of the last tamping in the condition it buys, so
+that a segment just under the reference owes nearly a whole tamping and one just tamped
+owes nearly nothing.
+
 **Possessions.** Each maintenance event (the segments tamped or renewed at one tonnage)
 takes one possession per contiguous run of its segments: the machine works a run in one
 go, whatever its length.
@@ -74,6 +83,10 @@ class Rates:
     reference_sd_mm : float, optional
         The common end state: segments at or over this D1 SD at the horizon are charged
         their tamping (the residual rule) [mm]; None: no residual.
+    tamped_sd_mm : float, optional
+        The D1 SD a tamping leaves at the reference [mm]: with it, every segment is charged
+        the share of a tamping its condition used (the condition rule); None: only those
+        at the reference.
     """
 
     tamping_per_m: float = 0.0
@@ -82,6 +95,7 @@ class Rates:
     discount_rate: float = 0.0
     annual_mgt: float | None = None
     reference_sd_mm: float | None = None
+    tamped_sd_mm: float | None = None
 
     def at(self, amount, mgt) -> np.ndarray:
         """Present value of ``amount`` [currency] spent at the tonnage ``mgt`` [MGT]."""
@@ -117,9 +131,11 @@ def possessions(ds) -> list[tuple[float, list[int]]]:
     return [(float(m), run) for m in np.unique(mgt) for run in runs(seg[mgt == m])]
 
 
-def end_state(ds, reference_sd_mm: float | None) -> pd.DataFrame:
+def end_state(ds, reference_sd_mm: float | None,
+              tamped_sd_mm: float | None = None) -> pd.DataFrame:  # fmt: skip
     """Per segment: its D1 SD at the horizon (worse rail) [mm], the tonnage since its last
-    intervention or the start [MGT] and whether it needs work to reach the reference.
+    intervention or the start [MGT], whether it needs work to reach the reference and the
+    share of a tamping the residual rule charges it.
 
     Parameters
     ----------
@@ -127,12 +143,15 @@ def end_state(ds, reference_sd_mm: float | None) -> pd.DataFrame:
         Result of `trackdyn.deterioration.predict`.
     reference_sd_mm : float, optional
         The common reference D1 SD [mm]; None: no segment needs work.
+    tamped_sd_mm : float, optional
+        The D1 SD a tamping leaves (`Rates.tamped_sd_mm`) [mm]; None: the share is 1 for a
+        segment that needs work, else 0.
 
     Returns
     -------
     pandas.DataFrame
-        ``d1_sd_horizon_mm``, ``since_tamping_mgt``, ``needs_work`` (bool), one row per
-        segment.
+        ``d1_sd_horizon_mm``, ``since_tamping_mgt``, ``needs_work`` (bool),
+        ``residual_share`` [-], one row per segment.
     """
     horizon = float(ds.mgt[-1])
     sd = ds.d1_sd.isel(mgt=-1).max("rail").values
@@ -140,8 +159,11 @@ def end_state(ds, reference_sd_mm: float | None) -> pd.DataFrame:
     for m, j in zip(ds.intervention_mgt.values, ds.intervention_segment.values, strict=True):
         last[j] = max(last[j], float(m))
     need = np.zeros(sd.size, bool) if reference_sd_mm is None else sd >= reference_sd_mm
+    share = need.astype(float)
+    if reference_sd_mm is not None and tamped_sd_mm is not None:
+        share = np.clip((sd - tamped_sd_mm) / (reference_sd_mm - tamped_sd_mm), 0.0, 1.0)
     return pd.DataFrame({"d1_sd_horizon_mm": sd, "since_tamping_mgt": horizon - last,
-                         "needs_work": need})  # fmt: skip
+                         "needs_work": need, "residual_share": share})  # fmt: skip
 
 
 def end_totals(datasets, reference_sd_mm: float | None) -> dict:
@@ -176,7 +198,8 @@ def end_totals(datasets, reference_sd_mm: float | None) -> dict:
 def discounted_work(ds, rates: Rates) -> dict:
     """One section's work, each part weighted by its present-value factor (`Rates.at`):
     ``tamped_m`` and ``renewed_m`` [m], ``possessions`` [-], and the residual rule's
-    ``residual_m`` [m] and ``residual_possessions`` [-] at the horizon. Undiscounted, the
+    ``residual_m`` (each segment's length times its ``residual_share``) [m] and
+    ``residual_possessions`` (of the runs that need work) [-] at the horizon. Undiscounted, the
     plain lengths and counts.
 
     Parameters
@@ -193,9 +216,10 @@ def discounted_work(ds, rates: Rates) -> dict:
     out = {f"{name}_m": float((length[seg] * factor)[kind == which].sum())
            for name, which in (("tamped", "tamping"), ("renewed", "renewal"))}  # fmt: skip
     out["possessions"] = float(sum(rates.at(1.0, m) for m, _ in possessions(ds)))
-    need = np.flatnonzero(end_state(ds, rates.reference_sd_mm)["needs_work"].to_numpy())
+    end = end_state(ds, rates.reference_sd_mm, rates.tamped_sd_mm)
+    need = np.flatnonzero(end["needs_work"].to_numpy())
     at_horizon = float(rates.at(1.0, float(ds.mgt[-1])))
-    out["residual_m"] = float(length[need].sum()) * at_horizon
+    out["residual_m"] = float((length * end["residual_share"].to_numpy()).sum()) * at_horizon
     out["residual_possessions"] = len(runs(need)) * at_horizon
     return out
 

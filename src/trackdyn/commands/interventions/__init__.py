@@ -12,7 +12,8 @@ renewal_per_m = 0.0              # per metre of segment whose ballast is renewed
 per_possession = 0.0             # per possession: each tamping run, whatever its length
 discount_rate = 0.0              # [-/year]; 0: undiscounted (needs annual_mgt otherwise)
 # annual_mgt = 10                # [MGT/year]; default the scenario's [maintenance] annual_mgt
-# residual = "none"              # default "end-state work": the horizon's needed tamping
+# residual = "end-state work"    # default "condition": each segment's used share of a
+                                 # tamping; "end-state work": those at the reference; "none"
 # reference_sd_mm = 2.0          # its common reference; default the scenario's threshold
 
 [[alternative]]
@@ -124,8 +125,8 @@ class Costs(Strict):
     """``[costs]``: the ``currency`` (default ``"cu"``, currency units, unnamed), the costs
     ``tamping_per_m`` and ``renewal_per_m`` [currency/m] and ``per_possession``
     [currency], the ``discount_rate`` [-/year] with ``annual_mgt`` [MGT/year] (default the
-    scenario's ``[maintenance] annual_mgt``), and the ``residual`` rule (``"end-state
-    work"``, default, or ``"none"``) with its ``reference_sd_mm`` [mm] (default the
+    scenario's ``[maintenance] annual_mgt``), and the ``residual`` rule (``"condition"``,
+    default, ``"end-state work"`` or ``"none"``) with its ``reference_sd_mm`` [mm] (default the
     scenario's ``[loop] threshold_sd_mm``); `trackdyn.studies.life_cycle`."""
 
     model_config = ConfigDict(strict=True)
@@ -136,7 +137,7 @@ class Costs(Strict):
     per_possession: NonNegativeFloat = 0.0
     discount_rate: float = Field(0.0, ge=0.0, lt=1.0)
     annual_mgt: PositiveFloat | None = None
-    residual: Literal["end-state work", "none"] = "end-state work"
+    residual: Literal["condition", "end-state work", "none"] = "condition"
     reference_sd_mm: PositiveFloat | None = None
 
     @field_validator("currency")
@@ -153,9 +154,12 @@ class Costs(Strict):
             raise TrackdynInputError("[costs] discount_rate needs annual_mgt ([costs] "
                                      "annual_mgt or the scenario's [maintenance])")  # fmt: skip
         reference = self.reference_sd_mm or spec.loop.threshold_sd_mm
+        tamped = None
+        if self.residual == "condition" and m is not None:  # the tamping model's σ' at σ_ref
+            tamped = m.recovery_offset_mm + m.recovery_slope * reference
         return Rates(self.tamping_per_m, self.renewal_per_m, self.per_possession,
                      self.discount_rate, annual,
-                     None if self.residual == "none" else reference)  # fmt: skip
+                     None if self.residual == "none" else reference, tamped)  # fmt: skip
 
 
 class InterventionsStudy(Strict):
@@ -315,7 +319,7 @@ def compare(study: InterventionsStudy, names, datasets,
                      **{money_name(k, code): v for k, v in money.items()}})  # fmt: skip
         for ds in mine:
             table = life_cycle_table(ds)
-            end = end_state(ds, rates.reference_sd_mm)
+            end = end_state(ds, rates.reference_sd_mm, rates.tamped_sd_mm)
             segments.append(pd.concat([table, end], axis=1).assign(alternative=alt.name))
     frame = pd.concat(segments, ignore_index=True)
     return pd.DataFrame(rows), frame[["alternative", *frame.columns[:-1]]]
