@@ -462,6 +462,17 @@ CASES += [
         {"bad.toml": SECTIONS, "l.csv": sections_list("name,geometry,supports", "..")},
         "l.csv: line 2: section name '..' is empty, repeated or not made of letters",
     ),
+    # interventions: a settlement-rate range beyond the 300 m section (its sleepers 0.3-299.7 m)
+    (
+        ["study", "study.toml"],
+        {
+            "study.toml": 'kind = "interventions"\nscenario = "m.toml"\n[[alternative]]\n'
+            'name = "x"\nsettlement_scale = [{ from_m = 5000, to_m = 6000, factor = 0.5 }]\n',
+            "m.toml": MAINTAINED,
+        },
+        "study.toml: alternative 'x': settlement_scale 5000-6000 m is outside section "
+        "g's supports (0.3-299.7 m)",
+    ),
     # runs: stored steps, a gap the discrete track does not span
     (
         ["run", "bad.toml"],
