@@ -25,6 +25,7 @@ from typer.testing import CliRunner
 
 from trackdyn.cli import app
 from trackdyn.commands.examples import example_file
+from trackdyn.deterioration.law_files import DEFAULT_FILE
 from trackdyn.io import write_geometry, write_supports
 from trackdyn.track.synthetic import synthetic_track
 
@@ -340,6 +341,12 @@ MAINTAINED = SHORT + "[maintenance]\n"
 SECTIONS = '[track]\nsections = "l.csv"\n[loop]\ntotal_mgt = 0.1\n'
 
 
+SOFT_KIND = (
+    DEFAULT_FILE.read_text() + '[power.soft]\nK_s = { value = 0.2, unit = "m", source = "x" }\n'
+)
+"""The shipped parameter file with a zone kind of the user's own, its K_s typed in m."""
+
+
 def sections_list(header: str, name: str = "a") -> str:
     """A sections list of one section, the 300 m one, under ``header``."""
     return f"{header}\n{name},{{track}}/g.csv,{{track}}/s.csv\n"
@@ -445,6 +452,32 @@ CASES += [
         ["deteriorate", "bad.toml"],
         {"bad.toml": RATE_FIELD, "f.csv": rate_rows(1.0, 1100.0) + "30.6,left,5.0,0.1\n"},
         "f.csv: lines 104 and 3670 both give the left rail at 30.6 m",  # 1834 seats x 2, +1
+    ),
+    # zones: a kind of the user's own typed in m, not mm; a range backwards
+    (
+        ["deteriorate", "bad.toml"],
+        {
+            "bad.toml": SHORT.replace(
+                "[loop]", 'zones = "z.csv"\n[settlement]\nfile = "p.toml"\n[loop]'
+            ),  # fmt: skip
+            "z.csv": "start_m,end_m,kind\n100,150,soft\n",
+            "p.toml": SOFT_KIND,
+        },
+        "p.toml: [power.soft] K_s = 0.2 m is outside the plausible 1e-05 to "
+        "0.01 m (min and max of [power] there)",  # the shipped 0.01-10 mm; after "z.csv: line 2: "
+    ),
+    (
+        ["deteriorate", "bad.toml"],
+        {
+            "bad.toml": SHORT.replace("[loop]", 'zones = "z.csv"\n[loop]'),
+            "z.csv": "start_m,end_m,kind\n200,100,open\n",
+        },
+        "z.csv: line 2: end_m 100 m is not beyond start_m 200 m",
+    ),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": "[run]\nstart_m = 200\nend_m = 100\n"},
+        "bad.toml: run: end_m = 100 m is not beyond start_m = 200 m",
     ),
     # sections lists: a zones column misnamed, an extra column, a name of dots
     (
