@@ -73,6 +73,20 @@ def test_round_trip(tmp_path):
     np.testing.assert_allclose(s2.right[1].deflection, s.right[1].deflection, rtol=1e-5)
 
 
+def test_distances_beyond_100_km_keep_their_quarter_metres(tmp_path):
+    """Samples 0.25 m apart and sleepers 0.6 m apart at 199.9-200 km: written with six
+    significant digits they collided (200000 and 200000.25 both "200000"), the geometry
+    was refused as not increasing and the supports' curves merged."""
+    x = 199_900.0 + 0.25 * np.arange(401)
+    g = Geometry(x, np.zeros(x.size), np.zeros(x.size))
+    s = Supports.linear(199_900.3 + 0.6 * np.arange(166), 80e6, 90e6)
+    write_geometry(g, tmp_path / "g.csv")
+    write_supports(s, tmp_path / "s.csv")
+    np.testing.assert_array_equal(read_geometry(tmp_path / "g.csv").distance, x)
+    np.testing.assert_allclose(read_supports(tmp_path / "s.csv").position, s.position, rtol=0,
+                               atol=1e-9)  # fmt: skip
+
+
 @pytest.mark.parametrize(
     ("text", "match"),
     [

@@ -422,11 +422,21 @@ def _measured_curves(load, deflection, start, lines, where) -> Curves:
     return Curves(load, deflection, start, where)
 
 
+DISTANCE_FORMAT = "{:.10g}"
+"""Distances written to CSV files [m]: ten significant digits, 0.1 mm at 1000 km (with six,
+samples 0.25 m apart beyond 100 km were written as the same distance)."""
+
+
+def _distances(x) -> list[str]:
+    return [DISTANCE_FORMAT.format(v) for v in np.asarray(x, dtype=float).tolist()]
+
+
 def write_geometry(geometry: Geometry, path) -> None:
-    """Write a geometry CSV with ``distance_m,left_mm,right_mm``."""
+    """Write a geometry CSV with ``distance_m,left_mm,right_mm`` (distances to
+    `DISTANCE_FORMAT`, the rest to six significant digits)."""
     frame = pd.DataFrame(
         {
-            "distance_m": geometry.distance,
+            "distance_m": _distances(geometry.distance),
             "left_mm": geometry.left * 1e3,
             "right_mm": geometry.right * 1e3,
         }
@@ -435,14 +445,15 @@ def write_geometry(geometry: Geometry, path) -> None:
 
 
 def write_supports(supports: Supports, path) -> None:
-    """Write a supports CSV as a long table ``distance_m,rail,load_kN,deflection_mm``."""
+    """Write a supports CSV as a long table ``distance_m,rail,load_kN,deflection_mm``
+    (distances to `DISTANCE_FORMAT`, the rest to six significant digits)."""
     rows = []
     for rail in RAILS:
         curves = getattr(supports, rail)
         rows.append(
             pd.DataFrame(
                 {
-                    "distance_m": np.repeat(supports.position, np.diff(curves.start)),
+                    "distance_m": _distances(np.repeat(supports.position, np.diff(curves.start))),
                     "rail": rail,
                     "load_kN": curves.load / 1e3,
                     "deflection_mm": curves.deflection * 1e3,

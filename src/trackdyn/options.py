@@ -105,6 +105,13 @@ class RunOptions(Strict):
         return value
 
     @model_validator(mode="after")
+    def _ordered_range(self):
+        start, end = self.start_m, self.end_m
+        if start is not None and end is not None and not end > start:
+            raise ValueError(f"end_m = {end:g} m is not beyond start_m = {start:g} m")
+        return self
+
+    @model_validator(mode="after")
     def _discrete_central(self):
         if self.track == "discrete" and (self.solver != "central" or self.nonlinear):
             raise ValueError(

@@ -5,7 +5,10 @@ the point) and a fragment of the expected message.
 In the files and arguments ``{track}`` stands for a folder holding a 300 m section
 (``g.csv``, ``s.csv``), that geometry with 5 m of NaN from line 12 (``gnan.csv``), supports
 covering only its first 50 m (``s50.csv``), every 17th sleeper only, 10.2 m apart
-(``s10.csv``), and all but three sleepers in a row, a 2.4 m gap (``sgap.csv``). Each case
+(``s10.csv``), and all but three sleepers in a row, a 2.4 m gap (``sgap.csv``); and the
+shipped calibration's 200 m surveys 1 and 2 (``c1.csv``, ``c2.csv``) and supports
+(``cs.csv``), the first survey's first 150 m and 40 m (``c150.csv``, ``c40.csv``) and moved
+by 150 m (``cmoved.csv``), the supports' first 100 m (``cs100.csv``). Each case
 runs in a folder of its own, with ``--out out`` unless the row gives ``--out``; afterwards
 that folder holds the row's files and nothing else.
 """
@@ -21,6 +24,8 @@ import xarray as xr
 from typer.testing import CliRunner
 
 from trackdyn.cli import app
+from trackdyn.commands.examples import example_file
+from trackdyn.deterioration.law_files import DEFAULT_FILE
 from trackdyn.io import write_geometry, write_supports
 from trackdyn.track.synthetic import synthetic_track
 
@@ -284,10 +289,62 @@ CASES = [
 ]
 
 
+SURVEYED = (
+    '[track]\nsupports = "{track}/cs.csv"\n[[survey]]\ngeometry = "{track}/c1.csv"\nmgt = 0\n'
+    '[[survey]]\ngeometry = "{track}/c2.csv"\nmgt = 2\n[loop]\nsegment_length_m = 100\n'
+    '[fit]\nparameters = ["K_s"]\n'
+)  # the shipped calibration's surveys 1-2 and supports, 200 m
+
+CASES += [
+    # calibrations: surveys that fit to nothing or do not line up, tables not used
+    (
+        ["calibrate", "bad.toml"],
+        {"bad.toml": SURVEYED.replace("c2.csv", "c1.csv")},
+        "survey 2 ({track}/c1.csv) at 2 MGT: its D1-band change from survey 1 ({track}/c1.csv) "
+        "at 0 MGT is 0 mm RMS, not above 2 x its measurement noise",
+    ),
+    (
+        ["calibrate", "bad.toml"],
+        {"bad.toml": SURVEYED + "[maintenance]\n"},
+        "bad.toml: [maintenance]: not used by a calibration",
+    ),
+    (
+        ["calibrate", "bad.toml"],
+        {"bad.toml": SURVEYED + "max_shift_m = 1e6\n"},
+        "bad.toml: fit.max_shift_m: Input should be less than or equal to 100",
+    ),
+    (
+        ["calibrate", "bad.toml"],
+        {"bad.toml": SURVEYED.replace("c1.csv", "c150.csv") + "max_shift_m = 100\n"},
+        "fit.max_shift_m = 100 m is beyond 75 m, 0.5 of the first survey's 150 m",
+    ),
+    (
+        ["calibrate", "bad.toml"],
+        {"bad.toml": SURVEYED.replace("c2.csv", "cmoved.csv")},
+        "cmoved.csv: covers 150-350 m and overlaps {track}/c1.csv (0-200 m) by less than half",
+    ),
+    (
+        ["calibrate", "bad.toml"],
+        {"bad.toml": SURVEYED.replace("c2.csv", "c40.csv")},
+        "survey 2 ({track}/c40.csv): covers 0-40 m (40 m); the fit needs 75 m",  # 2 x 25 + 25
+    ),
+    (
+        ["calibrate", "bad.toml"],
+        {"bad.toml": SURVEYED.replace("cs.csv", "cs100.csv")},
+        "cs100.csv: supports cover 0.3 to 99.9 m, the geometry 0 to 200 m ({track}/c1.csv)",
+    ),
+]
+
 SECTION = '[track]\ngeometry = "{track}/g.csv"\nsupports = "{track}/s.csv"\n'
 SHORT = SECTION + "[loop]\ntotal_mgt = 0.1\n"
 MAINTAINED = SHORT + "[maintenance]\n"
 SECTIONS = '[track]\nsections = "l.csv"\n[loop]\ntotal_mgt = 0.1\n'
+
+
+SOFT_KIND = (
+    DEFAULT_FILE.read_text() + '[power.soft]\nK_s = { value = 0.2, unit = "m", source = "x" }\n'
+)
+"""The shipped parameter file with a zone kind of the user's own, its K_s typed in m."""
 
 
 def sections_list(header: str, name: str = "a") -> str:
@@ -396,6 +453,32 @@ CASES += [
         {"bad.toml": RATE_FIELD, "f.csv": rate_rows(1.0, 1100.0) + "30.6,left,5.0,0.1\n"},
         "f.csv: lines 104 and 3670 both give the left rail at 30.6 m",  # 1834 seats x 2, +1
     ),
+    # zones: a kind of the user's own typed in m, not mm; a range backwards
+    (
+        ["deteriorate", "bad.toml"],
+        {
+            "bad.toml": SHORT.replace(
+                "[loop]", 'zones = "z.csv"\n[settlement]\nfile = "p.toml"\n[loop]'
+            ),  # fmt: skip
+            "z.csv": "start_m,end_m,kind\n100,150,soft\n",
+            "p.toml": SOFT_KIND,
+        },
+        "p.toml: [power.soft] K_s = 0.2 m is outside the plausible 1e-05 to "
+        "0.01 m (min and max of [power] there)",  # the shipped 0.01-10 mm; after "z.csv: line 2: "
+    ),
+    (
+        ["deteriorate", "bad.toml"],
+        {
+            "bad.toml": SHORT.replace("[loop]", 'zones = "z.csv"\n[loop]'),
+            "z.csv": "start_m,end_m,kind\n200,100,open\n",
+        },
+        "z.csv: line 2: end_m 100 m is not beyond start_m 200 m",
+    ),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": "[run]\nstart_m = 200\nend_m = 100\n"},
+        "bad.toml: run: end_m = 100 m is not beyond start_m = 200 m",
+    ),
     # sections lists: a zones column misnamed, an extra column, a name of dots
     (
         ["deteriorate", "bad.toml"],
@@ -411,6 +494,17 @@ CASES += [
         ["deteriorate", "bad.toml"],
         {"bad.toml": SECTIONS, "l.csv": sections_list("name,geometry,supports", "..")},
         "l.csv: line 2: section name '..' is empty, repeated or not made of letters",
+    ),
+    # interventions: a settlement-rate range beyond the 300 m section (its sleepers 0.3-299.7 m)
+    (
+        ["study", "study.toml"],
+        {
+            "study.toml": 'kind = "interventions"\nscenario = "m.toml"\n[[alternative]]\n'
+            'name = "x"\nsettlement_scale = [{ from_m = 5000, to_m = 6000, factor = 0.5 }]\n',
+            "m.toml": MAINTAINED,
+        },
+        "study.toml: alternative 'x': settlement_scale 5000-6000 m is outside section "
+        "g's supports (0.3-299.7 m)",
     ),
     # runs: stored steps, a gap the discrete track does not span
     (
@@ -433,7 +527,9 @@ CASES += [
 
 @pytest.fixture(scope="module")
 def track_folder(tmp_path_factory):
-    """A 300 m section, its geometry with 5 m of NaN, supports covering 50 m or 10 m apart."""
+    """A 300 m section, its geometry with 5 m of NaN, supports covering 50 m or 10 m apart;
+    the shipped calibration's surveys 1-2 and supports, the first survey cut to 150 m and to
+    40 m and moved by 150 m, the supports cut to 100 m."""
     folder = tmp_path_factory.mktemp("track")
     trk = synthetic_track(300.0, spectrum="fra5", seed=3)
     write_geometry(trk.geometry, folder / "g.csv")
@@ -447,6 +543,14 @@ def track_folder(tmp_path_factory):
     rows[every_17th].to_csv(folder / "s10.csv", index=False)
     three = rows["distance_m"].isin(rows["distance_m"].unique()[200:203])  # 120.3-121.5 m
     rows[~three].to_csv(folder / "sgap.csv", index=False)
+    for name, target in (("c1", "survey_1"), ("c2", "survey_2"), ("cs", "supports")):
+        shutil.copy(example_file("calibration", f"{target}.csv"), folder / f"{name}.csv")
+    survey = pd.read_csv(folder / "c1.csv")  # 0-200 m
+    survey[survey["distance_m"] <= 150].to_csv(folder / "c150.csv", index=False)
+    survey[survey["distance_m"] <= 40].to_csv(folder / "c40.csv", index=False)
+    survey.assign(distance_m=survey["distance_m"] + 150).to_csv(folder / "cmoved.csv", index=False)
+    supports = pd.read_csv(folder / "cs.csv")
+    supports[supports["distance_m"] < 100].to_csv(folder / "cs100.csv", index=False)
     return folder
 
 
@@ -464,7 +568,7 @@ def test_bad_input_is_refused(tmp_path, monkeypatch, track_folder, args, files, 
         args += ["--out", "out"]
     result = runner.invoke(app, args)
     assert result.exit_code == 2, result.output
-    assert message in result.stderr, result.stderr
+    assert message.replace("{track}", folder) in result.stderr, result.stderr
     assert len(result.stderr.strip().splitlines()) == 1  # one line, no traceback
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(files)  # nothing written
 

@@ -154,7 +154,7 @@ def load(kind, file):
         ("start_m,end_m,kind\n0,10,open\n5,20,structure\n", "zones 1 and 2 overlap"),
         ("start_m,end_m,kind\n0,10,tunnel\n", r"line 2: .*unknown zone kind .*'tunnel'"),
         ("start_m,end_m,kind\n0,x,open\n", "line 2: end_m 'x' is not a number"),
-        ("start_m,end_m,kind\n10,5,open\n", "zone 1 needs start_m < end_m"),
+        ("start_m,end_m,kind\n10,5,open\n", "line 2: end_m 5 m is not beyond start_m 10 m"),
         ("start_m,end_m,kind\n500,600,open\n", r"zone 1 \(500-600 m\) lies outside"),
         ("start_m,end_m\n0,10\n", "no column 'kind'"),
         ("start_m,end_m,kind,colour\n0,10,open,red\n", "unknown column 'colour'"),

@@ -39,14 +39,18 @@ from typing import Any
 import numpy as np
 
 from trackdyn.calibration.surveys import (
+    MIN_OVERLAP,
+    NOISE_FACTOR,
     REFINE,
     Alignment,
     align,
+    change_and_noise,
     common_grid,
     d1_change,
     profiles_at,
     read_survey,
 )
+from trackdyn.data import check_coverage
 from trackdyn.deterioration.law_files import law_bounds, law_file_table, law_units
 from trackdyn.deterioration.loop import NO_TRAFFIC_LOAD, LoopOptions
 from trackdyn.deterioration.runs import (
@@ -68,6 +72,10 @@ RESIDUAL_SPACING = WAVEBANDS["D1"][0] / 2
 
 EDGE = WAVEBANDS["D1"][1] / 2
 """Length left out at both ends, where the band-pass is less reliable [m]."""
+
+NEED = 2 * WAVEBANDS["D1"][1] + 2 * EDGE
+"""Shortest stretch the surveys and supports must share: twice the D1 band's longest
+wavelength and the ends left out [m]."""
 
 FD_STEP = 0.05
 """Forward-difference step of the Jacobian in fit coordinates (log or as is) [-]."""
@@ -214,6 +222,43 @@ def _fit_coordinates(spec, base: Path, law):
     return names, np.array(log), np.array(lower), np.array(upper), tuple(units)
 
 
+def _check_lengths(spec, geometries) -> None:
+    """Refuse a survey shorter than `NEED` and a ``fit.max_shift_m`` beyond which no shift
+    leaves `MIN_OVERLAP` of the first survey in common."""
+    for i, (s, g) in enumerate(zip(spec.survey, geometries, strict=True)):
+        x = g.distance
+        if x[-1] - x[0] < NEED:
+            raise TrackdynInputError(
+                f"survey {i + 1} ({s.geometry}): covers {x[0]:g}-{x[-1]:g} m "
+                f"({x[-1] - x[0]:g} m); the fit needs {NEED:g} m of surveys in common"
+            )
+    x = geometries[0].distance
+    most = (1 - MIN_OVERLAP) * (x[-1] - x[0])
+    if spec.fit.max_shift_m > most:
+        raise TrackdynInputError(
+            f"fit.max_shift_m = {spec.fit.max_shift_m:g} m is beyond {most:g} m, "
+            f"{1 - MIN_OVERLAP:g} of the first survey's {x[-1] - x[0]:g} m "
+            f"({spec.survey[0].geometry}): a survey shifted further shares less than "
+            f"{MIN_OVERLAP:g} of it"
+        )
+
+
+def _check_change(spec, k: int, change, x, valid) -> None:
+    """Refuse fitted survey ``k`` when its D1-band ``change`` from the first survey (2
+    rails, points on ``x``) is not above `NOISE_FACTOR` times what its measurement noise
+    alone gives there: nothing to fit (the same survey twice, too little traffic)."""
+    rms, noise = change_and_noise(x, change, valid)
+    if rms <= NOISE_FACTOR * noise:
+        first, later = spec.survey[0], spec.survey[k]
+        raise TrackdynInputError(
+            f"survey {k + 1} ({later.geometry}) at {later.mgt:g} MGT: its D1-band change "
+            f"from survey 1 ({first.geometry}) at {first.mgt:g} MGT is {rms * 1e3:.3g} mm "
+            f"RMS, not above {NOISE_FACTOR:g} x its measurement noise in the band "
+            f"({noise * 1e3:.3g} mm, from the sample-to-sample scatter): nothing to fit "
+            "(the same survey twice?)"
+        )
+
+
 def prepare(spec, base: Path, traffic, law, options) -> Calibration:
     """Check the calibration, read and align the surveys, take the measured changes.
 
@@ -235,8 +280,10 @@ def prepare(spec, base: Path, traffic, law, options) -> Calibration:
     names, log, lower, upper, units = _fit_coordinates(spec, base, law)
     files = [base / s.geometry for s in spec.survey]
     geometries = [read_survey(f) for f in files]
+    _check_lengths(spec, geometries)
     supports_file = base / spec.track.supports
     supports = read_supports(supports_file)
+    check_coverage(Track(geometries[0], supports), supports_file)
     extent = Track(geometries[0], supports).extent
     alignments: list[Alignment] = []
     for i, (g, file) in enumerate(zip(geometries, files, strict=True)):
@@ -252,11 +299,10 @@ def prepare(spec, base: Path, traffic, law, options) -> Calibration:
     shifts = [a.shift for a in alignments]
     grid = common_grid(geometries[0], geometries, shifts, extent, REFINE)
     x = geometries[0].distance[grid]
-    need = 2 * WAVEBANDS["D1"][1] + 2 * EDGE
-    if grid.size < 3 or x[-1] - x[0] < need:
+    if grid.size < 3 or x[-1] - x[0] < NEED:
         raise TrackdynInputError(
             f"{spec.track.supports}: the aligned surveys and the supports overlap over "
-            f"{(x[-1] - x[0]) if grid.size else 0:g} m; the fit needs {need:g} m"
+            f"{(x[-1] - x[0]) if grid.size else 0:g} m; the fit needs {NEED:g} m"
         )
     valid = (x >= x[0] + EDGE) & (x <= x[-1] - EDGE)
     for lo, hi in spec.fit.ignore_m:
@@ -267,6 +313,10 @@ def prepare(spec, base: Path, traffic, law, options) -> Calibration:
         raise TrackdynInputError("fit.ignore_m: leaves no distance to compare the surveys on")
     mgt = np.array([s.mgt - spec.survey[0].mgt for s in spec.survey])
     fitted = np.array([i > 0 and not s.check for i, s in enumerate(spec.survey)])
+    first = profiles_at(geometries[0], 0.0, x)
+    for k in np.flatnonzero(fitted).tolist():
+        change = profiles_at(geometries[k], alignments[k].shift, x) - first
+        _check_change(spec, k, change, x, valid)
     options = options.model_copy(update={
         "rate_cov": 0.0,
         "rate_factor": None,
@@ -280,7 +330,6 @@ def prepare(spec, base: Path, traffic, law, options) -> Calibration:
     heaviest = max((t.vehicle.static_wheel_load for t in traffic), default=NO_TRAFFIC_LOAD)
     lin = Track(geometries[0], supports).linearise(heaviest, options.run.delta,
                                                    extrapolate=options.run.extrapolate)  # fmt: skip
-    first = profiles_at(geometries[0], 0.0, x)
     return Calibration(spec, base, section, tuple(traffic), law, names, log, lower, upper, mgt,
                    tuple(alignments), grid, x, tuple(geometries), first, valid, use, fitted,
                    units, options, fit_options, supports.position,

@@ -28,7 +28,7 @@ import numpy as np
 
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import read_geometry
-from trackdyn.track.quality import longitudinal_level
+from trackdyn.track.quality import WAVEBANDS, longitudinal_level
 from trackdyn.track.track import RAILS, Geometry
 
 GAP_FACTOR = 2.0
@@ -134,11 +134,13 @@ def align(reference: Geometry, survey: Geometry, max_shift: float, around: float
             continue
         p, q = a[:, i0:i1], b[:, i0 + lag : i1 + lag]
         corr.append(np.sum(p * q) / np.sqrt(np.sum(p * p) * np.sum(q * q)))
-    corr = np.nan_to_num(np.array(corr), nan=-np.inf)
+    corr = np.nan_to_num(np.array(corr), nan=-np.inf, neginf=-np.inf)  # not -1.8e308
     k = int(np.argmax(corr))
     if not np.isfinite(corr[k]):
         raise TrackdynInputError(
-            f"{survey.where}: overlaps the first survey by less than half its length "
+            f"{survey.where}: covers {survey.distance[0]:g}-{survey.distance[-1]:g} m and "
+            f"overlaps {reference.where} ({reference.distance[0]:g}-"
+            f"{reference.distance[-1]:g} m) by less than half the shorter at every shift "
             f"within {around:+g} ± {max_shift:g} m"
         )
     frac = 0.0
@@ -207,3 +209,33 @@ def d1_change(x, change) -> np.ndarray:
         (2, points) profile change [m].
     """
     return np.array([longitudinal_level(x, c, "D1") for c in change])
+
+
+NOISE_FACTOR = 2.0
+"""A fitted survey's D1-band change must exceed this many times the measurement noise
+expected in the band [-]; noise alone gives about 1 (1.0 for 0.3 mm white noise on the
+example's 200 m)."""
+
+
+def change_and_noise(x, change, valid) -> tuple[float, float]:
+    """RMS of the D1-band part of a profile change at the ``valid`` points and the RMS that
+    its measurement noise alone would give in the band [m].
+
+    The noise is taken from the sample-to-sample scatter of the change (settlement under a
+    rail beam is smooth over a sample spacing, white noise of SD σ gives differences of SD
+    σ√2) and scaled to the D1 band's share of the frequencies up to the Nyquist frequency.
+
+    Parameters
+    ----------
+    x : ndarray
+        Uniformly spaced distances [m].
+    change : ndarray
+        (2 rails, points) profile change [m].
+    valid : ndarray
+        Points compared (away from the band-pass ends) [bool].
+    """
+    spacing = float(np.median(np.diff(x)))
+    shortest, longest = WAVEBANDS["D1"]
+    share = (1 / shortest - 1 / longest) * 2 * spacing
+    noise = float(np.std(np.diff(change, axis=1)) / np.sqrt(2) * np.sqrt(min(share, 1.0)))
+    return float(np.sqrt(np.mean(d1_change(x, change)[:, valid] ** 2))), noise

@@ -73,5 +73,6 @@ def check_coverage(track: Track, supports) -> None:
     if s[0] - g[0] > spacing or g[-1] - s[-1] > spacing:
         raise TrackdynInputError(
             f"{supports}: supports cover {s[0]:g} to {s[-1]:g} m, the geometry "
-            f"{g[0]:g} to {g[-1]:g} m; give supports along the whole geometry"
+            f"{g[0]:g} to {g[-1]:g} m ({track.geometry.where}); give supports along the "
+            "whole geometry"
         )

@@ -158,6 +158,17 @@ def _entry_toml(entry: dict) -> str:
     return "{ " + ", ".join(parts) + " }"
 
 
+def _check_plausible(key: str, value: float, bounds, units, source: str, within: str) -> None:
+    """Refuse ``key`` = ``value`` [SI] of ``source`` outside its ``bounds`` (min and max of
+    ``within``)."""
+    lo, hi = bounds.get(key, (-np.inf, np.inf))
+    if not lo <= value <= hi:
+        raise TrackdynInputError(
+            f"{source} {key} = {value:g} {units[key]} is outside the plausible {lo:g} to "
+            f"{hi:g} {units[key]} (min and max of {within})"
+        )
+
+
 def load_law(name: str, path=None, kind: str = "open", **overrides) -> LawParameters:
     """A settlement law with parameters from a TOML file.
 
@@ -171,17 +182,20 @@ def load_law(name: str, path=None, kind: str = "open", **overrides) -> LawParame
         the shipped illustrative file.
     kind : str
         Zone kind (`trackdyn.deterioration.zones`): ``open`` (the law's table), or a kind
-        whose sub-table ``[<name>.<kind>]`` replaces some of the parameters.
+        whose sub-table ``[<name>.<kind>]`` replaces some of the parameters (refused
+        outside the law's ``min`` and ``max``).
     **overrides : float
         Parameter values replacing the file's [SI units] (for every kind); refused
         outside the file's ``min`` and ``max`` where it gives them (a unit typed wrong).
     """
     cls, table, where = _law_table(name, path)
+    own: dict = {}  # the kind's own entries
     if kind != "open":
         kinds = zone_kinds(name, path)
         if kind not in kinds:
             raise unknown(f"zone kind (a table [{name}.<kind>])", kind, kinds, f"{where}: ")
-        table = {**table, **_full_table(name, path)[1][kind]}
+        own = _full_table(name, path)[1][kind]
+        table = {**table, **own}
     label = f"[{name}]" if kind == "open" else f"[{name}.{kind}]"
     expected = law_units(name)
     values = {}
@@ -196,16 +210,14 @@ def load_law(name: str, path=None, kind: str = "open", **overrides) -> LawParame
     extra = sorted(set(overrides) - set(expected))
     if extra:
         raise unknown(f"settlement parameter of the {name} law", extra[0], expected)
-    values.update({k: float(v) for k, v in overrides.items()})
     bounds = law_bounds(name, path)
+    for key in (k for k in own if k in values):  # within the law's min and max, as overrides
+        _check_plausible(key, values[key], bounds, expected, f"{where}: {label}",
+                         f"[{name}] there")  # fmt: skip
+    values.update({k: float(v) for k, v in overrides.items()})
     for key, value in overrides.items():
-        lo, hi = bounds.get(key, (-np.inf, np.inf))
-        if not lo <= value <= hi:
-            raise TrackdynInputError(
-                f"[settlement] overrides of {label} {key} = {value:g} {expected[key]} is "
-                f"outside the plausible {lo:g} to {hi:g} {expected[key]} (min and max of "
-                f"{where}; overrides are in SI units)"
-            )
+        _check_plausible(key, value, bounds, expected, f"[settlement] overrides of {label}",
+                         f"{where}; overrides are in SI units")  # fmt: skip
     missing = [k for k in expected if k not in values]
     if missing:
         raise TrackdynInputError(f"{where}: {label} missing parameter {missing[0]}")

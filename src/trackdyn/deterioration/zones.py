@@ -143,6 +143,8 @@ def read_zones(path, load) -> list[Zone]:
         line = f"{path}: line {i + 2}"
         value = {k: (None if pd.isna(v) else str(v).strip()) for k, v in row.items()}
         start, end = (_number(value[k], k, line) for k in ("start_m", "end_m"))
+        if not end > start:
+            raise TrackdynInputError(f"{line}: end_m {end:g} m is not beyond start_m {start:g} m")
         kind = value["kind"] or ""
         if not kind:
             raise TrackdynInputError(f"{line}: kind is empty")

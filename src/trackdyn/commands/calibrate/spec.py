@@ -25,7 +25,8 @@ check = true                    # not fitted: predicted with the fitted and star
 [fit]
 parameters = ["K_s", "load_exponent"]  # of the [settlement] law; each needs min and max
 min_correlation = 0.7           # refuse a survey whose D1 profile matches the first less
-max_shift_m = 20                # largest distance offset searched
+max_shift_m = 20                # largest distance offset searched (at most 100 m and half
+                                # the first survey's length)
 loss_scale_mm = 0.2             # residual size where the soft-L1 loss turns linear
 ignore_m = [[700, 740]]         # distance ranges left out (bridges, switches)
 max_iterations = 30             # evaluations of the misfit (each global fit)
@@ -57,6 +58,10 @@ from trackdyn.commands.deteriorate.scenario import (
 from trackdyn.deterioration.ballast import MAX_RATE_COV
 from trackdyn.options import Strict, load_toml
 
+MAX_SHIFT_M = 100.0
+"""Largest plausible ``fit.max_shift_m`` [m]: a recording car's distance reference drifts by
+metres between runs, not by hundreds of metres."""
+
 
 class SurveySpec(Strict):
     """``[[survey]]``: ``geometry`` CSV, its tonnage ``mgt`` [MGT], and ``check`` (not
@@ -76,7 +81,7 @@ class FitSpec(Strict):
 
     parameters: list[str] = Field(min_length=1)
     min_correlation: float = Field(0.7, gt=0, le=1)
-    max_shift_m: PositiveFloat = 20.0
+    max_shift_m: float = Field(20.0, gt=0, le=MAX_SHIFT_M)
     loss_scale_mm: PositiveFloat = 0.2
     ignore_m: list[tuple[float, float]] = Field(default_factory=list)
     max_iterations: PositiveInt = 30
@@ -122,6 +127,12 @@ class CalibrationScenario(DeteriorationScenario):
                     f"survey {i + 1} ({self.survey[i].geometry}): mgt {self.survey[i].mgt:g} "
                     f"is not above the {self.survey[i - 1].mgt:g} of the one before"
                 )
+        unused = [t for t in ("maintenance", "forecast") if getattr(self, t) is not None]
+        if unused:
+            raise ValueError(
+                f"[{unused[0]}]: not used by a calibration (it fits the law to the surveys, "
+                "untamped, without an ensemble), leave it out"
+            )
         given = sorted({"total_mgt", "snapshot_every_mgt"} & self.loop.model_fields_set)
         if given:
             raise ValueError(f"loop.{given[0]}: set by the survey tonnages, leave it out")

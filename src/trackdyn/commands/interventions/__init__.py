@@ -193,19 +193,25 @@ def alternative_scenario(spec: DeteriorationScenario, alt: Alternative, where: s
     return parse(DeteriorationScenario, data, where)
 
 
+def _check_inside(key: str, ranges, sec: Section, extent) -> None:
+    """Refuse a ``key`` range (`RangeScale`) outside the ``extent`` of the section's
+    sleepers [m]."""
+    first, last = extent
+    for s in ranges:
+        if s.from_m < first or s.to_m > last:
+            raise TrackdynInputError(
+                f"{key} {s.from_m:g}-{s.to_m:g} m is outside section "
+                f"{sec.name}'s supports ({first:g}-{last:g} m)"
+            )
+
+
 def _scaled_section(sec: Section, alt: Alternative, folder: Path) -> Section:
     """The section with the alternative's supports ranges applied (written to ``folder``)."""
     mine = [s for s in alt.supports_scale if s.section in (None, sec.name)]
     if not mine:
         return sec
     source = sec.supports or str(example_path(EXAMPLE_SUPPORTS))
-    first, last = support_extent(source)
-    for s in mine:
-        if s.from_m < first or s.to_m > last:
-            raise TrackdynInputError(
-                f"supports_scale {s.from_m:g}-{s.to_m:g} m is outside section "
-                f"{sec.name}'s supports ({first:g}-{last:g} m)"
-            )
+    _check_inside("supports_scale", mine, sec, support_extent(source))
     target = folder / f"{alt.name}_{sec.name}_supports.csv"
     scale_supports(source, target, [Scale(s.from_m, s.to_m, s.factor, s.ramp) for s in mine])
     geometry = sec.geometry or str(example_path(EXAMPLE_GEOMETRY))
@@ -218,6 +224,7 @@ def _settlement_scaled(options, sec: Section, alt: Alternative):
     if not mine:
         return options
     position = load_track(sec.geometry, sec.supports).supports.position
+    _check_inside("settlement_scale", mine, sec, (float(position[0]), float(position[-1])))
     factor = np.ones(position.size)
     for s in mine:
         factor *= Scale(s.from_m, s.to_m, s.factor, s.ramp).at(position)
