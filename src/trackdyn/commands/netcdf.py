@@ -37,9 +37,12 @@ Eaton, B. et al. (2018), NetCDF Climate and Forecast (CF) Metadata Conventions, 
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 
-from trackdyn.commands.staging import record_of
+from trackdyn.commands.staging import as_json, record_of
+from trackdyn.provenance import utc_now, versions
 from trackdyn.units import name_unit, udunits
 
 CONVENTIONS = "CF-1.8"
@@ -56,12 +59,18 @@ def timings(ds) -> dict[str, float]:
 
 
 def _attribute(value):
-    """A value netCDF stores: numbers and strings as they are, anything else as text."""
+    """A value netCDF stores (None: none, the attribute is left out): numbers and text as
+    they are, true and false as ``"true"`` and ``"false"``, lists and tables as JSON text."""
     if isinstance(value, bool | np.bool_):
         return str(bool(value)).lower()
-    if isinstance(value, int | float | str | np.integer | np.floating):
+    if isinstance(value, int | float | str | np.integer | np.floating) or value is None:
         return value
-    return "none" if value is None else str(value)
+    return json.dumps(as_json(value), allow_nan=False)
+
+
+def _attributes(attrs: dict) -> dict:
+    """``attrs`` as netCDF stores them (`_attribute`), those that are None left out."""
+    return {k: _attribute(v) for k, v in attrs.items() if v is not None}
 
 
 def _describe(var, name: str) -> None:
@@ -104,7 +113,7 @@ def to_cf(ds, record=None):
         The run's provenance, for the global attributes.
     """
     out = ds.copy()
-    out.attrs = {k: v for k, v in ds.attrs.items() if k not in WALL_CLOCK}
+    out.attrs = _attributes({k: v for k, v in ds.attrs.items() if k not in WALL_CLOCK})
     for dim in list(out.dims):
         if dim in out.coords and out[dim].dtype.kind in "UO":
             names = out[dim].variable
@@ -137,12 +146,14 @@ def global_attributes(title: str | None, record=None) -> dict:
     """
     from trackdyn import __version__
 
+    created = record.created if record else utc_now()
     attrs = {
         "Conventions": CONVENTIONS,
         "title": title or (record.title if record else "trackdyn result"),
-        "history": record.command_line if record else f"trackdyn {__version__}",
+        "history": f"{created} {record.command_line if record else 'trackdyn'}",
+        "date_created": created,
         "source": f"trackdyn {__version__}",
-        "trackdyn_version": __version__,
+        **{f"{name}_version": v for name, v in versions().items()},
     }
     if record is not None:
         for name, (path, digest) in record.input_digests().items():
@@ -150,7 +161,7 @@ def global_attributes(title: str | None, record=None) -> dict:
             attrs[f"input_{name}_sha256"] = digest
         attrs.update({f"option_{k}": v for k, v in record.options.items()})
         attrs.update({f"vehicle_{k}": v for k, v in record.vehicle.items()})
-    return {k: _attribute(v) for k, v in attrs.items()}
+    return _attributes(attrs)
 
 
 def write_netcdf(ds, path) -> None:
