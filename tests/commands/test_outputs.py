@@ -24,6 +24,8 @@ runner = CliRunner()
 
 SUMMARY_KEYS = {
     "trackdyn_version",
+    "versions",
+    "created",
     "command",
     "command_line",
     "title",
@@ -53,8 +55,18 @@ supports = "supports.csv"
 
 @pytest.fixture(scope="module")
 def outputs(tmp_path_factory):
-    """run, track, study and deteriorate on a 150 m synthetic section: their folders."""
-    base = tmp_path_factory.mktemp("outputs")
+    """run, track, study and deteriorate on a 150 m synthetic section: their folders (the
+    date fixed by SOURCE_DATE_EPOCH, so that a second run can write the same bytes)."""
+    with pytest.MonkeyPatch.context() as env:
+        env.setenv("SOURCE_DATE_EPOCH", EPOCH)
+        yield _outputs(tmp_path_factory.mktemp("outputs"))
+
+
+EPOCH = "1700000000"
+"""A fixed date for the files (2023-11-14 22:13:20 UTC)."""
+
+
+def _outputs(base):
     trk = synthetic_track(150.0, spectrum="fra5", seed=5)
     write_geometry(trk.geometry, base / "geometry.csv")
     write_supports(trk.supports, base / "supports.csv")
@@ -126,7 +138,9 @@ def test_netcdf_files_say_what_made_them(outputs, command):
             assert ds.sleeper.attrs["units"] == "m"
     assert attrs["Conventions"] == "CF-1.8"
     assert attrs["trackdyn_version"] == trackdyn.__version__
-    assert attrs["title"] and attrs["history"].startswith(f"trackdyn {command}")
+    assert attrs["title"] and attrs["history"].startswith(
+        f"2023-11-14T22:13:20Z trackdyn {command}"
+    )
     if command == "deteriorate":
         return  # the sections name their own track files
     geometry = base / "geometry.csv"
@@ -176,8 +190,9 @@ def test_summary_json_describes_the_run(outputs, command):
         assert headline["runs"] == 2 and headline["failed_runs"] == 0
 
 
-def test_identical_runs_write_identical_netcdf_files(outputs):
+def test_identical_runs_write_identical_netcdf_files(outputs, monkeypatch):
     base, folders = outputs
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", EPOCH)  # the date of the first runs
     first = {name: (folders[c] / name).read_bytes() for c, name in NETCDF.items()}
     commands = {
         "run": ["run", str(base / "run.toml")],
