@@ -41,14 +41,15 @@ import json
 
 import numpy as np
 
+from trackdyn.commands.names import words
 from trackdyn.commands.staging import as_json, record_of
 from trackdyn.provenance import utc_now, versions
 from trackdyn.units import name_unit, udunits
 
 CONVENTIONS = "CF-1.8"
-RENAMED = {"time": "run_time"}
-"""Dimensions written under another name (see the module docstring)."""
-LABEL_SUFFIX = "_name"
+COUNTS = ("tampings", "renewals", "interventions")
+"""Variables that count events: written as integers of unit ``1`` where the Dataset holds
+them as floats (a table's column)."""
 WALL_CLOCK = ("time_vehicle_runs_s", "time_beam_solves_s", "time_bookkeeping_s")
 """Attributes of a deterioration result that say how long its parts took [s]."""
 
@@ -82,7 +83,7 @@ def _describe(var, name: str) -> None:
     if "units" in attrs:
         attrs["units"] = udunits(str(attrs["units"]))
     if "long_name" not in attrs:
-        attrs["long_name"] = stem.replace("_", " ")
+        attrs["long_name"] = words(name)
     positive = attrs.pop("positive", None)  # CF: an attribute of vertical coordinates only
     if positive:
         attrs["long_name"] += f", {positive} positive"
@@ -97,7 +98,7 @@ def _index(ds, dim: str):
     ]  # fmt: skip
     if len(along) == 1:
         c = along[0]
-        return (dim, c.values, {"long_name": str(c.name).replace("_", " "), **c.attrs})
+        return (dim, c.values, {"long_name": words(str(c.name)), **c.attrs})
     index = np.arange(ds.sizes[dim], dtype=np.int32)
     return (dim, index, {"long_name": f"{dim} index (0: first)"})
 
@@ -116,22 +117,33 @@ def to_cf(ds, record=None):
     out.attrs = _attributes({k: v for k, v in ds.attrs.items() if k not in WALL_CLOCK})
     for dim in list(out.dims):
         if dim in out.coords and out[dim].dtype.kind in "UO":
-            names = out[dim].variable
-            out = out.drop_vars(dim).assign_coords({f"{dim}{LABEL_SUFFIX}": names})
-            out[f"{dim}{LABEL_SUFFIX}"].attrs.setdefault("long_name", f"{dim} name")
+            out[dim].attrs.setdefault("long_name", f"{dim} name")
         if dim not in out.indexes:
             out = out.assign_coords({dim: _index(out, dim)})
-    out = out.rename({k: v for k, v in RENAMED.items() if k in out.dims})
     for name, var in out.variables.items():
         if var.dtype.kind in "iu" and var.dtype.itemsize > 4:
             if var.size and np.abs(var.values).max() >= 2**31:
                 raise ValueError(f"{name}: integers beyond 32 bits")
             out[name] = var.astype(np.int32)
+        if str(name) in COUNTS and var.dtype.kind == "f" and _whole(var.values):
+            out[name] = var.astype(np.int32)
+        if str(name) in COUNTS:
+            out[name].attrs.setdefault("units", "1")
         _describe(out[name].variable, str(name))
-    if "run_time" in out.variables:
-        out["run_time"].attrs["long_name"] = "time from the start of the run"
+    if "time" in out.variables:
+        out["time"].attrs["long_name"] = "time from the start of the run"
     out.attrs.update(global_attributes(out.attrs.get("title"), record))
     return out
+
+
+def _whole(values) -> bool:
+    """Every value a whole number that 32 bits hold (a count stored as float)."""
+    return bool(np.all(np.isfinite(values) & (values == np.round(values))))
+
+
+def labels(ds) -> list[str]:
+    """The coordinates of ``ds`` that label a dimension with names (``contact``)."""
+    return [str(d) for d in ds.dims if d in ds.coords and ds[d].dtype.kind in "UO"]
 
 
 def global_attributes(title: str | None, record=None) -> dict:
@@ -183,6 +195,8 @@ def write_netcdf(ds, path) -> None:
     if record is not None:
         record.timings.update(timings(ds))
     encoding = {name: {"_FillValue": None} for name in out.coords}
+    for name in labels(out):  # CF 6.1 labels: character arrays, read back as strings
+        encoding[name]["dtype"] = "S1"
     out.to_netcdf(path, format="NETCDF4", encoding=encoding)
 
 
@@ -196,11 +210,4 @@ def read_netcdf(path):
     """
     import xarray as xr
 
-    ds = xr.load_dataset(path)
-    ds = ds.rename({v: k for k, v in RENAMED.items() if v in ds.dims})
-    for dim in list(ds.dims):
-        label = f"{dim}{LABEL_SUFFIX}"
-        if label in ds.coords and ds[label].dims == (dim,):
-            names = ds[label].variable
-            ds = ds.drop_vars([dim, label]).assign_coords({dim: names})
-    return ds
+    return xr.load_dataset(path)
