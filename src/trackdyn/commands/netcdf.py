@@ -194,7 +194,7 @@ def write_netcdf(ds, path) -> None:
     out = to_cf(ds, record)
     if record is not None:
         record.timings.update(timings(ds))
-    encoding = {name: {"_FillValue": None} for name in out.coords}
+    encoding: dict[str, dict] = {name: {"_FillValue": None} for name in out.coords}
     for name in labels(out):  # CF 6.1 labels: character arrays, read back as strings
         encoding[name]["dtype"] = "S1"
     out.to_netcdf(path, format="NETCDF4", encoding=encoding)
