@@ -1,33 +1,37 @@
-"""netCDF files: CF-1.8, with the run's provenance, the same bytes for the same run.
+"""netCDF files: CF-1.8, with the run's provenance, opened labelled by plain xarray.
 
 Every command writes its Datasets through `write_netcdf`, which makes the file follow the
 CF conventions 1.8 (checked by the IOOS compliance checker in the tests) without changing
-the Dataset the command goes on to plot:
+the Dataset the command goes on to plot, so that ``xr.open_dataset`` gives it back
+labelled (``ds.wheel_load.sel(contact="FL")``):
 
-- global attributes ``Conventions``, ``title``, ``history`` (the command line, no date),
-  ``trackdyn_version``, ``source``, and from the output folder's
-  `trackdyn.commands.staging.Record` the inputs (``input_<name>`` path and
-  ``input_<name>_sha256``), the options (``option_<name>``) and the vehicle parameters
-  (``vehicle_<name>`` [SI]);
+- global attributes ``Conventions``, ``title``, ``history`` (the date and the command
+  line), ``date_created``, ``source``, the versions of trackdyn, Python and the packages
+  that shape results (``<name>_version``, `trackdyn.provenance.versions`), and from the
+  output folder's `trackdyn.commands.staging.Record` every input file (``input_<name>``
+  path and ``input_<name>_sha256``), the options (``option_<name>``) and the vehicle
+  parameters (``vehicle_<name>`` [SI]); lists and tables as JSON text, an attribute that
+  is None left out (`_attribute`);
 - every dimension has an index coordinate: a dimension labelled by names (``contact``,
-  ``rail``, ``dof``, ...) is written as an integer index with the names in the label
-  variable ``<dim>_name`` (CF 6.1: a coordinate variable is numeric); a dimension without a
-  coordinate gets as index the one strictly increasing coordinate along it (``sleeper``:
-  the positions of ``sleeper_distance``, so that ``ds.settlement.plot()`` draws against
-  distance), else an integer index (``segment``, ``step``);
-- no ``_FillValue`` on coordinates; 64-bit integers as 32-bit; every variable has a
-  ``long_name`` (taken from its name where the Dataset gives none) and, where the name ends
-  in a unit (``dyn_load_sd_kN``, ``tamped_m_per_100_mgt``), its ``units``, read whole from
-  the name by the unit registry (`trackdyn.units.name_unit`); every ``units`` is parsed by
-  the registry and written in UDUNITS spelling (`trackdyn.units.udunits`: ``MGT``, million
+  ``rail``, ``dof``, ...) keeps its names, written as CF 6.1 labels (character arrays,
+  which xarray reads back as strings); a dimension without a coordinate gets as index the
+  one strictly increasing coordinate along it (``sleeper``: the positions of
+  ``sleeper_distance``, so that ``ds.settlement.plot()`` draws against distance), else an
+  integer index (``segment``, ``step``);
+- no ``_FillValue`` on coordinates; 64-bit integers as 32-bit; counts held as floats
+  (`COUNTS`) as integers of unit ``1``; every variable has a ``long_name`` (in words from
+  `trackdyn.commands.names` where the Dataset gives none) and, where the name ends in a
+  unit (``dyn_load_sd_kN``, ``tamped_m_per_100_mgt``), its ``units``, read whole from the
+  name by the unit registry (`trackdyn.units.name_unit`); every ``units`` is parsed by the
+  registry and written in UDUNITS spelling (`trackdyn.units.udunits`: ``MGT``, million
   gross tonnes, as ``Mt``);
-- the time axis of a run is written as ``run_time``: CF reads a variable named ``time`` as
-  calendar time, which needs a reference date that a simulation has not;
+- a run's time axis is ``time`` in seconds from its start (no reference date: CF 1.8, 4.4,
+  tells calendar time by units ``<unit> since <date>``);
 - the attributes that say how long parts of the computation took (`WALL_CLOCK`) are left
-  out of the file, so that two identical runs write identical files; the command's summary
-  (``summary.json``) keeps them.
+  out of the file; with ``SOURCE_DATE_EPOCH`` set (the date written) two identical runs
+  write identical files; the command's summary (``summary.json``) keeps the timings.
 
-`read_netcdf` gives back the Dataset as the command had it (names as coordinates again).
+`read_netcdf` reads a file into memory.
 
 References
 ----------
@@ -201,7 +205,8 @@ def write_netcdf(ds, path) -> None:
 
 
 def read_netcdf(path):
-    """A file written by `write_netcdf`, as the command's Dataset (names as coordinates).
+    """A file written by `write_netcdf`, loaded into memory (the file closed): the
+    command's Dataset, names as coordinates.
 
     Parameters
     ----------
