@@ -222,7 +222,7 @@ def gather(results: list[Result]):
         },
     )
     ds = ds.assign_coords(frequency=("frequency", SPECTRUM_FREQUENCY, {"units": "Hz"}))
-    for name in ds.data_vars:
+    for name in [*ds.data_vars, *swept]:
         unit = name_unit(str(name))[1]  # read whole: pad_stiffness_kN_per_mm is kN/mm
         if unit is not None:
             ds[name].attrs["units"] = unit
