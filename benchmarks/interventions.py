@@ -42,7 +42,15 @@ def main() -> None:
         took = time.perf_counter() - start
         table = pd.read_csv(out / "interventions_compared.csv")
     print(f"{len(table)} alternatives on {workers} worker(s): {took:.1f} s wall")
-    columns = ["alternative", "tampings", "renewals", "mean_interval_mgt", "life_cycle_cost"]
+    columns = [
+        "alternative",
+        "tampings",
+        "renewals",
+        "mean_interval_mgt",
+        "d1_sd_horizon_max_mm",
+        "residual_cost_cu",
+        "life_cycle_cost_cu",
+    ]
     print(table[columns].to_string(index=False, float_format="%.1f"))
 
 

@@ -24,6 +24,7 @@ from trackdyn.errors import TrackdynInputError, check_series
 from trackdyn.limits import MAX_SAMPLE_SPACING
 from trackdyn.provenance import note_read
 from trackdyn.track.support import Curves
+from trackdyn.track.survey import GeometryFormat, surveyed
 from trackdyn.track.track import RAILS, Geometry, Supports
 from trackdyn.units import spelled_factor
 
@@ -155,7 +156,9 @@ def _read_chunks(path, rows: int, **options) -> Iterator[pd.DataFrame]:
                 raise _unreadable(path, exc) from None
 
 
-def column(frame: pd.DataFrame, quantity: str, kind: str, where) -> tuple[np.ndarray, str]:
+def column(
+    frame: pd.DataFrame, quantity: str, kind: str, where, gaps: bool = False
+) -> tuple[np.ndarray, str]:
     """Values of the column ``<quantity>_<unit>`` converted to SI, and the column name.
 
     Parameters
@@ -168,6 +171,8 @@ def column(frame: pd.DataFrame, quantity: str, kind: str, where) -> tuple[np.nda
         Physical kind (`COLUMN_KINDS`): the column's unit must be one of that kind.
     where : str or Path
         File name for error messages.
+    gaps : bool
+        Empty and NaN cells are NaN (a gap to bridge), except in the first and last row.
     """
     si_unit, examples = COLUMN_KINDS[kind]
     matches = [c for c in frame.columns if str(c).startswith(quantity + "_")]
@@ -183,7 +188,9 @@ def column(frame: pd.DataFrame, quantity: str, kind: str, where) -> tuple[np.nda
             f"(such as {examples})"
         ) from None
     values = pd.to_numeric(frame[name], errors="coerce").to_numpy(dtype=float)
-    bad = np.flatnonzero(~np.isfinite(values))
+    missing = frame[name].isna().to_numpy().copy()
+    missing[[0, -1] if missing.size else []] = False
+    bad = np.flatnonzero(~np.isfinite(values) & ~(gaps & missing))
     if bad.size:
         raise TrackdynInputError(
             f"{where}: column {name!r} is empty, NaN, infinite or not a number "
@@ -192,9 +199,19 @@ def column(frame: pd.DataFrame, quantity: str, kind: str, where) -> tuple[np.nda
     return values * factor, name
 
 
-def read_geometry(path) -> Geometry:
-    """Read a geometry CSV (``distance_m,left_mm,right_mm``) into SI units."""
-    return _geometry(_read_csv(path), path)
+def read_geometry(path, fmt: GeometryFormat | None = None) -> Geometry:
+    """Read a geometry CSV (``distance_m,left_mm,right_mm``) into SI units.
+
+    Parameters
+    ----------
+    path : path
+        The CSV file; its first column ``distance_<unit>`` or ``chainage_<unit>``,
+        increasing or decreasing.
+    fmt : GeometryFormat, optional
+        What its columns hold (`trackdyn.track.survey`); default a profile, positive
+        downward, gaps up to `trackdyn.track.survey.MAX_GAP_M` bridged.
+    """
+    return _geometry(_read_csv(path), path, GeometryFormat() if fmt is None else fmt)
 
 
 def geometry_pieces(path, rows: int = CHUNK_ROWS) -> Iterator[tuple[np.ndarray, ...]]:
@@ -214,9 +231,15 @@ def geometry_pieces(path, rows: int = CHUNK_ROWS) -> Iterator[tuple[np.ndarray, 
         last = frame.iloc[-1:]
 
 
-def _geometry(frame: pd.DataFrame, path) -> Geometry:
-    """Geometry of a table read from ``path``; messages count the rows of the whole file."""
-    distance, name = column(frame, "distance", "length", path)
+def _geometry(frame: pd.DataFrame, path, fmt: GeometryFormat | None = None) -> Geometry:
+    """Geometry of a table read from ``path``; messages count the rows of the whole file.
+    With ``fmt`` (the whole file), read as `trackdyn.track.survey.surveyed` says; without
+    (a piece of a long file), a profile in increasing distance and without gaps."""
+    along = "chainage" if fmt is not None and "distance" not in _quantities(frame) else "distance"
+    distance, name = column(frame, along, "length", path)
+    reversed_ = fmt is not None and distance.size > 1 and distance[-1] < distance[0]
+    if reversed_:
+        frame, distance = frame.iloc[::-1], distance[::-1]
     try:
         check_series(distance, min_points=2, where=str(path))
     except TrackdynInputError as exc:  # rows in the file count the header line
@@ -228,12 +251,20 @@ def _geometry(frame: pd.DataFrame, path) -> Geometry:
             f"band (3-25 m) needs them at most {MAX_SAMPLE_SPACING:g} m apart (a wrong "
             "length unit?)"
         )
-    left, _ = column(frame, "left", "length", path)
-    right, _ = column(frame, "right", "length", path)
+    left, _ = column(frame, "left", "length", path, gaps=fmt is not None)
+    right, _ = column(frame, "right", "length", path, gaps=fmt is not None)
     try:
+        if fmt is not None:
+            lines = frame.index.to_numpy() + 2
+            return surveyed(distance, left, right, lines, fmt, path, reversed_)
         return Geometry(distance, left, right, str(path))
     except TrackdynInputError as exc:
         raise TrackdynInputError(_file_rows(str(exc), frame.index, 0, "row")) from None
+
+
+def _quantities(frame: pd.DataFrame) -> set[str]:
+    """The quantities a table's columns name (``distance`` of ``distance_km``)."""
+    return {str(c).partition("_")[0] for c in frame.columns}
 
 
 def _file_rows(message: str, index, first: int, word: str) -> str:

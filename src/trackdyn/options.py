@@ -42,15 +42,10 @@ from pydantic import (
 from trackdyn.errors import TrackdynInputError, unknown
 from trackdyn.io import read_toml
 from trackdyn.limits import MAX_SPEED_KMH
+from trackdyn.strict import Strict
 from trackdyn.track.support import DELTA
+from trackdyn.track.survey import GeometryFormat
 from trackdyn.vehicle.parameters import load_vehicle, vehicle_source
-
-
-class Strict(BaseModel):
-    """Base of scenario tables: unknown keys are refused, values are frozen, and ``inf``
-    and ``nan`` are no number."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 class RunOptions(Strict):
@@ -149,8 +144,9 @@ class VehicleSpec(Strict):
         return load_vehicle(self.source(base), **self.overrides)
 
 
-class TrackSpec(Strict):
-    """``[track]``: ``geometry`` and ``supports`` CSV files; neither: the built-in example."""
+class TrackSpec(GeometryFormat):
+    """``[track]``: ``geometry`` and ``supports`` CSV files; neither: the built-in example;
+    and what the geometry file holds (`trackdyn.track.survey.GeometryFormat`)."""
 
     geometry: Path | None = None
     supports: Path | None = None
@@ -166,7 +162,7 @@ class TrackSpec(Strict):
         """The track (`trackdyn.track.track.Track`)."""
         from trackdyn.data import load_track
 
-        return load_track(*self.paths(base))
+        return load_track(*self.paths(base), self.geometry_format())
 
 
 def load_toml(model: type[BaseModel], path=None, default: BaseModel | None = None):

@@ -31,6 +31,11 @@ power, ``kmh`` for km/h and ``mgt`` for MGT (`NAME_SPELLINGS`), and every other 
 its symbol: ``stiffness_kN_per_mm`` [kN/mm], ``body_bounce_acc_rms_m_per_s2`` [m/s^2],
 ``tamped_m_per_100_mgt`` [m/(100 MGT)].
 
+Costs carry their currency the same way, as the name's last part (``life_cycle_cost_EUR``,
+`money_name`), and as the ``units`` of their netCDF variables: a currency is not a unit of
+the registry (no conversion between currencies is implied), so it is checked for its
+spelling (`currency`) and refused where a name would read it as a unit (``t``, ``m``).
+
 The registry is built once, on first use (importing pint takes 0.1-0.3 s), and each unit
 text is parsed once: a conversion is one factor per unit, applied to a whole column.
 """
@@ -293,6 +298,39 @@ def name_unit(name: str) -> tuple[str, str | None]:
             whole = parts[start - 1] != "per"
             return ("_".join(parts[:start]), unit) if whole else (name, None)
     return name, None
+
+
+CURRENCY = re.compile(r"^[A-Za-z][A-Za-z0-9]{0,7}$")
+"""A currency's spelling: an ISO 4217 code (``EUR``, ``ZAR``) or a short word of letters
+and digits (``cu``, currency units, the default where none is named)."""
+
+
+def currency(code: str) -> str:
+    """``code`` checked as a currency (`CURRENCY`, and no unit of the registry).
+
+    Parameters
+    ----------
+    code : str
+        The currency.
+
+    Raises
+    ------
+    ValueError
+        It is not one word of up to 8 letters and digits, or a name ending in it would be
+        read as a unit of the registry.
+    """
+    if not CURRENCY.match(code):
+        raise ValueError(f"currency {code!r} is not one word of up to 8 letters and digits")
+    if spelled_unit(code) is not None:
+        raise ValueError(f"currency {code!r} reads as the unit {spelled_unit(code)}; "
+                         "give its ISO 4217 code")  # fmt: skip
+    return code
+
+
+def money_name(quantity: str, code: str) -> str:
+    """A cost's column and variable name: ``quantity`` with the currency as its unit part
+    (``life_cycle_cost_EUR``)."""
+    return f"{quantity}_{code}"
 
 
 @functools.cache

@@ -228,7 +228,7 @@ BAD = {
     "other section": (calibration_text(surveys=("survey_1.csv", "other.csv", "survey_3.csv")),
                       "below fit.min_correlation = 0.7"),
     "gap": (calibration_text(surveys=("survey_1.csv", "gap.csv", "survey_3.csv")),
-            "gap of 20.25 m after 97.05 m"),
+            "a gap of 20.25 m in the geometry (97.05 to 117.3 m)"),
     "short": (calibration_text(surveys=("survey_1.csv", "survey_2.csv", "short.csv")),
               "short.csv: the surveys share only"),
     "tonnage": (calibration_text(mgt=(0.0, 5.0, 2.0)), "is not above the 5 of the one before"),

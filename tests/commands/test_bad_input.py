@@ -3,7 +3,7 @@
 A row gives the command line, the files it reads (text, or bytes where the encoding is
 the point) and a fragment of the expected message.
 In the files and arguments ``{track}`` stands for a folder holding a 300 m section
-(``g.csv``, ``s.csv``), that geometry with a NaN at line 12 (``gnan.csv``), supports
+(``g.csv``, ``s.csv``), that geometry with 5 m of NaN from line 12 (``gnan.csv``), supports
 covering only its first 50 m (``s50.csv``), every 17th sleeper only, 10.2 m apart
 (``s10.csv``), and all but three sleepers in a row, a 2.4 m gap (``sgap.csv``). Each case
 runs in a folder of its own, with ``--out out`` unless the row gives ``--out``; afterwards
@@ -253,7 +253,7 @@ CASES = [
     (
         ["study", "bad.toml"],
         {"bad.toml": 'kind = "speed"\n' + NAN_TRACK},
-        "gnan.csv: column 'left_mm' is empty, NaN, infinite or not a number at line 12",
+        "gnan.csv: lines 11-32: a gap of 5.25 m in the geometry (2.25 to 7.5 m), longer than",
     ),
     (["study", "--workers", "100000"], {}, "--workers 100000 is outside the plausible 1 to"),
     (
@@ -433,13 +433,13 @@ CASES += [
 
 @pytest.fixture(scope="module")
 def track_folder(tmp_path_factory):
-    """A 300 m section, its geometry with a NaN, supports covering 50 m or 10 m apart."""
+    """A 300 m section, its geometry with 5 m of NaN, supports covering 50 m or 10 m apart."""
     folder = tmp_path_factory.mktemp("track")
     trk = synthetic_track(300.0, spectrum="fra5", seed=3)
     write_geometry(trk.geometry, folder / "g.csv")
     write_supports(trk.supports, folder / "s.csv")
     geometry = pd.read_csv(folder / "g.csv")
-    geometry.loc[10, "left_mm"] = float("nan")
+    geometry.loc[10:29, "left_mm"] = float("nan")  # 21 steps of 0.25 m: longer than 2 m
     geometry.to_csv(folder / "gnan.csv", index=False)
     rows = pd.read_csv(folder / "s.csv")
     rows[rows["distance_m"] < 50].to_csv(folder / "s50.csv", index=False)

@@ -20,7 +20,7 @@ from trackdyn.deterioration.runs import run_sections
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import read_supports, write_geometry, write_supports
 from trackdyn.options import load_toml
-from trackdyn.studies.interventions import Scale, costs, scale_supports
+from trackdyn.studies.interventions import Scale, scale_supports
 from trackdyn.track.synthetic import SoftSpot, synthetic_track
 
 runner = CliRunner()
@@ -123,26 +123,89 @@ def test_fixing_the_soft_spot_delays_and_does_not_add_tampings(compared):
 
 def test_costs_add_up(compared):
     table = pd.read_csv(compared / "interventions_compared.csv").set_index("alternative")
+    segments = pd.read_csv(compared / "interventions_segments.csv")
     for name, row in table.iterrows():
         # every segment is 60 m long (segment_length_m) and costs 10 per m tamped, 100 renewed
+        # (the study's [costs], no currency given: "cu"); undiscounted, no possession cost
         assert row["tamped_m"] == pytest.approx(60.0 * row["tampings"])
-        assert row["tamping_cost"] == pytest.approx(10.0 * 60.0 * row["tampings"])
-        assert row["renewal_cost"] == pytest.approx(100.0 * 60.0 * row["renewals"])
-        assert row["intervention_cost"] == {"base": 0.0, "spot-fixed": 1000.0}[name]
-        parts = row["tamping_cost"] + row["renewal_cost"] + row["intervention_cost"]
-        assert row["life_cycle_cost"] == pytest.approx(parts)
+        assert row["tamping_cost_cu"] == pytest.approx(10.0 * 60.0 * row["tampings"])
+        assert row["renewal_cost_cu"] == pytest.approx(100.0 * 60.0 * row["renewals"])
+        assert row["intervention_cost_cu"] == {"base": 0.0, "spot-fixed": 1000.0}[name]
+        # the residual (the condition rule): 10 per m times each segment's used share of its
+        # length (the CSVs' 6 significant digits)
+        mine = segments[segments.alternative == name]
+        share = mine.residual_share.to_numpy()
+        length = (mine.segment_end_m - mine.segment_start_m).to_numpy()
+        assert row["residual_cost_cu"] == pytest.approx(10.0 * (length * share).sum(), rel=1e-5)
+        # the share in closed form: (σ_h - σ_t) / (σ_ref - σ_t), σ_ref the 0.12 mm threshold,
+        # σ_t = 0.05 + 0.3 x 0.12 mm, the scenario's tamping model at the reference
+        tamped = 0.05 + 0.3 * 0.12
+        expected = np.clip((mine.d1_sd_horizon_mm - tamped) / (0.12 - tamped), 0.0, 1.0)
+        np.testing.assert_allclose(share, expected, atol=1e-4)  # σ_h: 6 digits, x 1/0.034
+        parts = (row["tamping_cost_cu"] + row["renewal_cost_cu"] + row["intervention_cost_cu"]
+                 + row["residual_cost_cu"])  # fmt: skip
+        assert row["life_cycle_cost_cu"] == pytest.approx(parts, rel=1e-5)  # 6 digits each
     assert {"interventions_compared.nc", "interventions_compared.png"} <= {
         p.name for p in compared.iterdir()
     }
-    assert xr.open_dataset(compared / "interventions_compared.nc").sizes["alternative"] == 2
+    ds = xr.open_dataset(compared / "interventions_compared.nc")
+    assert ds.sizes["alternative"] == 2
+    assert ds.life_cycle_cost_cu.attrs["units"] == "cu"  # the currency as the cost's unit
+    assert ds.tamped_m.attrs["units"] == "m"
 
 
-def test_costs_in_closed_form():
-    totals = {"tamped_m": 120.0, "renewed_m": 60.0}
-    got = costs(totals, tamping_per_m=10.0, renewal_per_m=100.0, intervention=1000.0)
-    # 10 × 120 = 1200, 100 × 60 = 6000, 1200 + 6000 + 1000 = 8200
-    assert got == {"tamping_cost": 1200.0, "renewal_cost": 6000.0,
-                   "intervention_cost": 1000.0, "life_cycle_cost": 8200.0}  # fmt: skip
+def test_the_end_state_per_segment_is_the_runs_own(compared, folder):
+    """``interventions_segments.csv``'s end terms of the base are the base run's: the D1 SD
+    of its last state (worse rail) and the tonnage since its segment's last tamping."""
+    segments = pd.read_csv(compared / "interventions_segments.csv")
+    base = segments[segments.alternative == "base"].reset_index(drop=True)
+    spec, where = load_deterioration(folder / "scenario.toml")
+    ds = run_sections(section_tasks(spec, where), workers=1)[0]
+    np.testing.assert_allclose(base.d1_sd_horizon_mm,
+                               ds.d1_sd.isel(mgt=-1).max("rail").values, rtol=1e-5)  # fmt: skip
+    for j in range(2):
+        at = ds.intervention_mgt.values[ds.intervention_segment.values == j]
+        since = 8.0 - (at.max() if at.size else 0.0)  # 8 MGT horizon; none: since the start
+        assert base.since_tamping_mgt[j] == pytest.approx(since, rel=1e-5)
+
+
+LATER = """
+[[alternative]]
+name = "later"                  # only the threshold raised: never tamps within 7 MGT
+threshold_sd_mm = 5.0
+"""
+
+
+def test_deferring_is_no_longer_free(folder, tmp_path):
+    """The constructed case: over 7 MGT the base tamps the soft spot's 60 m segment once
+    (at 5.5 MGT, the threshold 0.12 mm; measured) and ends under the threshold; ``later``
+    tamps nothing and leaves that segment over it. The end-state rule charges ``later`` that
+    segment's tamping at the horizon: 60 m x 10 per m + one possession of 100, the base's
+    own tamping and possession (600 + 100); without it, ``later`` would cost nothing."""
+    from trackdyn.commands.interventions import compare
+
+    for name in ("geometry.csv", "supports.csv"):
+        (tmp_path / name).write_bytes((folder / name).read_bytes())
+    (tmp_path / "scenario.toml").write_text(SCENARIO.replace("total_mgt = 8", "total_mgt = 7"))
+    study = STUDY.replace("renewal_per_m = 100.0", "renewal_per_m = 100.0\nper_possession = 100"
+                          '\nresidual = "end-state work"')  # fmt: skip
+    (tmp_path / "study.toml").write_text(study + LATER)
+    out = tmp_path / "out"
+    args = ["study", str(tmp_path / "study.toml"), "--out", str(out), "--workers", "1"]
+    assert runner.invoke(app, args).exit_code == 0
+    table = pd.read_csv(out / "interventions_compared.csv").set_index("alternative")
+    assert table.loc["base", "tampings"] == 1 and table.loc["base", "needs_work_m"] == 0
+    assert table.loc["later", "tampings"] == 0 and table.loc["later", "needs_work_m"] == 60
+    assert table.loc["later", "residual_cost_cu"] == 700.0
+    assert table.loc["base", "life_cycle_cost_cu"] == 700.0  # 600 tamping + 100 possession
+    assert table.loc["later", "life_cycle_cost_cu"] >= table.loc["base", "life_cycle_cost_cu"]
+    # the same runs without the residual rule: deferring looks free
+    spec = load_toml(InterventionsStudy, tmp_path / "study.toml")[0]
+    labelled, scenario, _ = alternative_tasks(spec, tmp_path / "study.toml", tmp_path)
+    free = spec.costs.model_copy(update={"residual": "none"}).rates(scenario)
+    datasets = run_alternatives(labelled, workers=1)
+    plain, _ = compare(spec, [a for a, _ in labelled], datasets, free)
+    assert plain.set_index("alternative").loc["later", "life_cycle_cost_cu"] == 0.0
 
 
 def test_an_alternative_without_changes_is_the_scenario_itself(folder, tmp_path):
@@ -293,14 +356,14 @@ def test_cost_spread_in_closed_form():
 
     # 4 members x 2 alternatives: b cheapest in members 0 and 1, a in 2, a tie in 3
     costs = np.array([[5.0, 3.0], [6.0, 4.0], [1.0, 2.0], [7.0, 7.0]])
-    got = cost_spread(costs, ["a", "b"]).set_index("alternative")
+    got = cost_spread(costs, ["a", "b"], "EUR").set_index("alternative")
     # probability cheapest: b 2 + 0.5 of 4 members = 0.625, a 1 + 0.5 = 0.375
     assert got.loc["b", "probability_cheapest"] == 0.625
     assert got.loc["a", "probability_cheapest"] == 0.375
     # p10/p50/p90 are members' values (inverted_cdf): a's sorted 1, 5, 6, 7 -> 1, 5, 7
-    assert got.loc["a", ["life_cycle_cost_p10", "life_cycle_cost_p50",
-                         "life_cycle_cost_p90"]].tolist() == [1.0, 5.0, 7.0]  # fmt: skip
-    assert got.loc["a", "life_cycle_cost_mean"] == 4.75 and got.loc["a", "members"] == 4
+    assert got.loc["a", ["life_cycle_cost_p10_EUR", "life_cycle_cost_p50_EUR",
+                         "life_cycle_cost_p90_EUR"]].tolist() == [1.0, 5.0, 7.0]  # fmt: skip
+    assert got.loc["a", "life_cycle_cost_mean_EUR"] == 4.75 and got.loc["a", "members"] == 4
 
 
 def test_a_forecast_scenario_gives_each_alternatives_cost_spread(folder, tmp_path):
@@ -328,12 +391,16 @@ def test_a_forecast_scenario_gives_each_alternatives_cost_spread(folder, tmp_pat
     study, _ = load_toml(InterventionsStudy, tmp_path / "study.toml")
     labelled, spec, base = alternative_tasks(study, tmp_path / "study.toml", tmp_path)
     plan = plan_forecast(spec, base, [t for alt, t in labelled if alt == "base"])
+    rates = study.costs.rates(spec)
     each = []
     for m in range(3):
         pairs = [(alt, member_tasks(t, plan.members)[m]) for alt, t in labelled]
-        table, _ = compare(study, [a for a, _ in pairs], run_alternatives(pairs, workers=1))
-        each.append(table.set_index("alternative").life_cycle_cost)
+        table, _ = compare(study, [a for a, _ in pairs], run_alternatives(pairs, workers=1),
+                           rates)  # fmt: skip
+        each.append(table.set_index("alternative").life_cycle_cost_cu)
     costs = pd.concat(each, axis=1)
     for name in ("base", "spot-fixed"):
-        assert spread.loc[name, "life_cycle_cost_p50"] == sorted(costs.loc[name])[1]
-        assert spread.loc[name, "life_cycle_cost_mean"] == pytest.approx(costs.loc[name].mean())
+        # the file's 6 significant digits
+        p50, mean = sorted(costs.loc[name])[1], costs.loc[name].mean()
+        assert spread.loc[name, "life_cycle_cost_p50_cu"] == pytest.approx(p50, rel=1e-5)
+        assert spread.loc[name, "life_cycle_cost_mean_cu"] == pytest.approx(mean, rel=1e-5)

@@ -63,6 +63,15 @@ EXAMPLES: dict[str, tuple[str, dict[str, str], str]] = {
         },
         "trackdyn study {to}/interventions.toml --out interventions-out",
     ),
+    "survey": (
+        "a run on a recording car's file: asymmetric-chord versines in decreasing km, a gap",
+        {
+            "survey.toml": "examples/survey/survey.toml",
+            "versine.csv": "examples/survey/versine.csv",
+            "supports.csv": "data/example_supports.csv",
+        },
+        "trackdyn run {to}/survey.toml --out survey-out",
+    ),
     "calibration": (
         "a calibration with three synthetic surveys of a 200 m section",
         {

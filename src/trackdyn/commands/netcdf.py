@@ -24,7 +24,8 @@ labelled (``ds.wheel_load.sel(contact="FL")``):
   unit (``dyn_load_sd_kN``, ``tamped_m_per_100_mgt``), its ``units``, read whole from the
   name by the unit registry (`trackdyn.units.name_unit`); every ``units`` is parsed by the
   registry and written in UDUNITS spelling (`trackdyn.units.udunits`: ``MGT``, million
-  gross tonnes, as ``Mt``);
+  gross tonnes, as ``Mt``), except a cost's: a variable whose ``currency`` attribute names
+  one (`trackdyn.units.currency`) has it as its ``units`` (UDUNITS has no currency);
 - a run's time axis is ``time`` in seconds from its start (no reference date: CF 1.8, 4.4,
   tells calendar time by units ``<unit> since <date>``);
 - the attributes that say how long parts of the computation took (`WALL_CLOCK`) are left
@@ -48,10 +49,10 @@ import numpy as np
 from trackdyn.commands.names import words
 from trackdyn.commands.staging import as_json, record_of
 from trackdyn.provenance import utc_now, versions
-from trackdyn.units import name_unit, udunits
+from trackdyn.units import currency, name_unit, udunits
 
 CONVENTIONS = "CF-1.8"
-COUNTS = ("tampings", "renewals", "interventions")
+COUNTS = ("tampings", "renewals", "possessions", "interventions")
 """Variables that count events: written as integers of unit ``1`` where the Dataset holds
 them as floats (a table's column)."""
 WALL_CLOCK = ("time_vehicle_runs_s", "time_beam_solves_s", "time_bookkeeping_s")
@@ -82,12 +83,16 @@ def _describe(var, name: str) -> None:
     """Give ``var`` a long_name and CF units (in place, on the file's copy)."""
     stem, unit = name_unit(name)
     attrs = var.attrs
-    if "units" not in attrs and unit is not None and var.dtype.kind in "fiu":
+    code = attrs.pop("currency", None)
+    if code is not None:
+        attrs["units"] = currency(str(code))
+        stem = name.removesuffix(f"_{code}")
+    elif "units" not in attrs and unit is not None and var.dtype.kind in "fiu":
         attrs["units"] = unit
-    if "units" in attrs:
+    if "units" in attrs and code is None:
         attrs["units"] = udunits(str(attrs["units"]))
     if "long_name" not in attrs:
-        attrs["long_name"] = words(name)
+        attrs["long_name"] = words(name if code is None else stem)
     positive = attrs.pop("positive", None)  # CF: an attribute of vertical coordinates only
     if positive:
         attrs["long_name"] += f", {positive} positive"

@@ -45,6 +45,9 @@ SHORT_NAMES = {
     "mgt": "MGT",
     "error_start": "error at the start",
     "life_cycle_cost": "life-cycle cost",
+    "d1_sd_horizon_max": "D1 SD at the horizon, max",
+    "d1_sd_horizon_mean": "D1 SD at the horizon, mean",
+    "since_tamping_mean": "since tamping, mean",
 }
 # Notes printed under a table whose headers use the symbol.
 NOTES = {"ΔP": "ΔP: dynamic wheel load (wheel load - static wheel load)"}
@@ -53,13 +56,16 @@ MISSING = "–"
 """A value that is missing (NaN: a failed run, a quantity without data)."""
 
 
-def header(column: str) -> str:
+def header(column: str, currency: str | None = None) -> str:
     """Table header of a column: its quantity in words, then its unit in brackets.
 
     Parameters
     ----------
     column : str
         Column name with an optional unit suffix (``dyn_load_max_kN``).
+    currency : str, optional
+        The currency that ends the names of costs (``life_cycle_cost_EUR``,
+        `trackdyn.units.money_name`).
 
     Returns
     -------
@@ -70,7 +76,8 @@ def header(column: str) -> str:
     """
     if column.startswith("factor_"):
         return f"factor {column.removeprefix('factor_')}"
-    for suffix, unit in HEADER_UNITS.items():
+    units = HEADER_UNITS if currency is None else {f"_{currency}": currency, **HEADER_UNITS}
+    for suffix, unit in units.items():
         if column.endswith(suffix):
             stem = column.removesuffix(suffix)
             return f"{_words(stem)}\n[{unit}]"
@@ -167,7 +174,7 @@ def _width(console, table: Table) -> int:
     return Measurement.get(console, console.options.update(max_width=10**6), table).maximum
 
 
-def frame_table(table, title: str) -> FoldedTable:
+def frame_table(table, title: str, currency: str | None = None) -> FoldedTable:
     """A DataFrame as a table: headers in words with units, values by `cell`.
 
     No column is narrower than its widest value or header word: at a narrow terminal the
@@ -180,8 +187,10 @@ def frame_table(table, title: str) -> FoldedTable:
         Columns named with unit suffixes (`header`).
     title : str
         Title above the table.
+    currency : str, optional
+        The currency that ends the names of costs (`header`).
     """
-    headers = [header(str(col)) for col in table.columns]
+    headers = [header(str(col), currency) for col in table.columns]
     notes = [note for symbol, note in NOTES.items() if any(symbol in h for h in headers)]
     cells = [[cell(v) for v in table[col]] for col in table.columns]
     text = [table[col].dtype.kind not in "biufc" for col in table.columns]

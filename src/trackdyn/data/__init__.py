@@ -10,6 +10,7 @@ import numpy as np
 
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import read_geometry, read_supports
+from trackdyn.track.survey import GeometryFormat
 from trackdyn.track.track import Track
 
 EXAMPLE_GEOMETRY = "example_geometry.csv"
@@ -23,7 +24,7 @@ def example_path(name: str) -> Path:
     return Path(str(files(__name__).joinpath(name)))
 
 
-def load_track(geometry=None, supports=None) -> Track:
+def load_track(geometry=None, supports=None, geometry_format=None) -> Track:
     """Read a track from CSV files; with neither given, the built-in example section.
 
     Parameters
@@ -33,6 +34,8 @@ def load_track(geometry=None, supports=None) -> Track:
     supports : path, optional
         Supports CSV, ``distance_m,rail,load_kN,deflection_mm`` or
         ``distance_m,rail,stiffness_kN_per_mm``.
+    geometry_format : GeometryFormat, optional
+        What the geometry file holds (`trackdyn.track.survey`); default a profile.
     """
     for name, value in (("geometry", geometry), ("supports", supports)):
         if value is not None and not isinstance(value, str | os.PathLike):
@@ -44,8 +47,13 @@ def load_track(geometry=None, supports=None) -> Track:
             "give both a geometry and a supports file, or neither for the built-in example"
         )
     if geometry is None:
+        if geometry_format not in (None, GeometryFormat()):
+            raise TrackdynInputError(
+                "geometry_kind, chord, max_gap_m and profile_sign describe a geometry file; "
+                "the built-in example is a profile"
+            )
         geometry, supports = example_path(EXAMPLE_GEOMETRY), example_path(EXAMPLE_SUPPORTS)
-    track = Track(read_geometry(geometry), read_supports(supports))
+    track = Track(read_geometry(geometry, geometry_format), read_supports(supports))
     check_coverage(track, supports)
     return track
 

@@ -9,7 +9,10 @@ those that are due:
   tamping; ``neighbours`` segments each side are tamped with it (the stretch around it),
   and so are the adjacent segments past the alert limit (``alert_fraction`` of the
   threshold);
-- ``policy = "fixed"``: every segment every ``interval_mgt``.
+- ``policy = "fixed"``: every segment every ``interval_mgt``;
+- ``policy = "planned"``: the stretches a plan gives (``planned``, each ``(tonnage,
+  start, end)``; `trackdyn.deterioration.planning`), each at the first step end at or
+  after its tonnage; set by a scenario's ``[plan]``, never in ``[maintenance]``.
 
 A segment tamped ``max_tampings`` times gets its ballast renewed at the next
 intervention instead (the damage of the tampings is undone; the geometry is restored as
@@ -72,7 +75,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from pydantic import ConfigDict, Field, field_validator, model_validator
+from pydantic import ConfigDict, Field, field_validator, model_serializer, model_validator
 from scipy.optimize import brentq
 
 from trackdyn.deterioration.quality import D1Assessment
@@ -138,6 +141,10 @@ class MaintenanceOptions(Strict):
         Rise of the settlement rate per tamping [-]; default 0.1, illustrative.
     seed : int
         Seed of the irregularity each tamping leaves.
+    planned : tuple of (float, float, float)
+        The ``"planned"`` policy's stretches: tonnage [MGT], start and end [m] (the
+        segments whose middle lies within are tamped); left out of the options' record
+        when empty.
     """
 
     model_config = ConfigDict(strict=True)  # "5" is no number
@@ -158,6 +165,15 @@ class MaintenanceOptions(Strict):
     loosening_mgt: float = Field(3.0, gt=0.0, le=1000.0)
     damage_per_tamping: float = Field(0.1, ge=0.0, le=1.0)
     seed: int = Field(0, ge=0)
+    planned: tuple[tuple[float, float, float], ...] = ()
+
+    @model_serializer(mode="wrap")
+    def _without_plan(self, handler):
+        # options without a plan record what they recorded before the policy existed
+        data = handler(self)
+        if not self.planned:
+            data.pop("planned", None)
+        return data
 
     @field_validator("policy")
     @classmethod
@@ -170,6 +186,9 @@ class MaintenanceOptions(Strict):
     def _interval(self):
         if self.policy == "fixed" and self.interval_mgt is None:
             raise ValueError("maintenance policy 'fixed' needs interval_mgt")
+        if (self.policy == "planned") != bool(self.planned):
+            raise ValueError("maintenance policy 'planned' and its stretches come from a "
+                             "scenario's [plan] table")  # fmt: skip
         return self
 
 
@@ -460,7 +479,39 @@ class ThresholdPolicy(Policy):
         return dm
 
 
-POLICIES: dict[str, type[Policy]] = {"threshold": ThresholdPolicy, "fixed": FixedPolicy}
+class PlannedPolicy(Policy):
+    """``policy = "planned"``: the stretches of ``planned``, each at the first step end at
+    or after its tonnage (a step ends at each tonnage after the start)."""
+
+    def __init__(self):
+        self.done = 0  # the planned stretches tamped so far, in tonnage order
+
+    @staticmethod
+    def _planned(m: Maintenance) -> list:
+        return sorted(m.o.planned)
+
+    def next_due(self, m: Maintenance, mgt: float) -> float:
+        """See `Policy.next_due`: the next planned tonnage after ``mgt``."""
+        later = [t for t, _, _ in self._planned(m) if t > mgt * (1 + 1e-12)]
+        return min(later, default=np.inf)
+
+    def due(self, m: Maintenance, mgt: float, sd) -> np.ndarray:
+        """See `Policy.due`: the segments of every planned stretch whose tonnage has come."""
+        plan = self._planned(m)
+        come = [p for p in plan[self.done :] if p[0] <= mgt * (1 + 1e-12)]
+        self.done += len(come)
+        middle = 0.5 * (m.starts + m.ends)
+        held = np.zeros(m.starts.size, dtype=bool)
+        for _, start, end in come:
+            held |= (middle >= start) & (middle <= end)
+        return np.flatnonzero(held)
+
+
+POLICIES: dict[str, type[Policy]] = {
+    "threshold": ThresholdPolicy,
+    "fixed": FixedPolicy,
+    "planned": PlannedPolicy,
+}
 """Registry of maintenance policies by name; add an entry to plug in another policy."""
 
 

@@ -19,6 +19,7 @@ from trackdyn.deterioration.results import make_dataset
 from trackdyn.deterioration.settlement import SettlementLaw
 from trackdyn.deterioration.zones import check_zones
 from trackdyn.errors import Failure
+from trackdyn.track.survey import NOTE_PREFIX, GeometryFormat
 
 
 @dataclass(frozen=True)
@@ -33,12 +34,15 @@ class Section:
         CSV files; None for both: the built-in example.
     zones : str, optional
         Zone table (`trackdyn.deterioration.zones`); None: all open track.
+    geometry_format : GeometryFormat, optional
+        What the geometry file holds (`trackdyn.track.survey`); None: a profile.
     """
 
     name: str
     geometry: str | None = None
     supports: str | None = None
     zones: str | None = None
+    geometry_format: GeometryFormat | None = None
 
 
 @dataclass(frozen=True)
@@ -111,13 +115,16 @@ def run_group(tasks: list[SectionTask]) -> list:
         Per section, its Dataset or its `Failure` (as `run_section`).
     """
     loops: dict[int, SectionLoop] = {}
+    notes: dict[int, tuple] = {}
     results: list = [None] * len(tasks)
     for i, task in enumerate(tasks):
         try:
-            track = load_track(task.section.geometry, task.section.supports)
+            sec = task.section
+            track = load_track(sec.geometry, sec.supports, sec.geometry_format)
             position = track.supports.position
             check_zones(task.zones, (position[0], position[-1]), task.section.zones or "zones")
             loops[i] = SectionLoop(track, task.traffic, task.law, task.options, zones=task.zones)
+            notes[i] = track.geometry.notes
         except Exception as exc:  # noqa: BLE001 - reported with the section, others go on
             results[i] = Failure.of(exc).named(f"section {task.section.name}")
     progress = len(tasks) == 1 and tasks[0].progress
@@ -128,6 +135,7 @@ def run_group(tasks: list[SectionTask]) -> list:
         else:
             ds = results[i] = make_dataset(out)
             ds.attrs["section"] = name
+            ds.attrs.update({NOTE_PREFIX + topic: text for topic, text in notes[i]})
     return results
 
 

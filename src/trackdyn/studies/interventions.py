@@ -6,8 +6,8 @@ each load-deflection curve in the range by ``factor`` at the same loads (a linea
 stiffness is multiplied by it): the secant stiffness at every load, and a void (the
 deflection before the sleeper bears), scale by the same factor.
 
-The costs are undiscounted sums over the horizon, in the user's currency: tamping and
-renewal per metre of segment treated, and the intervention's own cost.
+The costs over time, the possessions and the end state each alternative leaves are
+`trackdyn.studies.life_cycle`'s.
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ import numpy as np
 
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import column, read_table
+from trackdyn.studies.life_cycle import possessions
 
 RAMPS = ("none", "up", "down")
 """How a scale runs over its range: all of it (``none``), or linearly from 1 at ``from_m``
@@ -91,11 +92,12 @@ def maintenance_totals(datasets) -> dict:
     -------
     dict
         ``tampings``, ``renewals`` [-]; ``tamped_m`` and ``renewed_m``, the segment length
-        treated [m]; ``mean_interval_mgt``, the mean tonnage between two interventions of
+        treated [m]; ``possessions``, the tamping runs (`trackdyn.studies.life_cycle.
+        possessions`) [-]; ``mean_interval_mgt``, the mean tonnage between two interventions of
         a segment [MGT] (NaN without two on one segment); ``tamped_m_per_100_mgt``, the
         length tamped or renewed per 100 MGT [m].
     """
-    out = dict.fromkeys(("tampings", "renewals", "tamped_m", "renewed_m"), 0.0)
+    out = dict.fromkeys(("tampings", "renewals", "tamped_m", "renewed_m", "possessions"), 0.0)
     intervals: list[float] = []
     per_100 = 0.0
     for ds in datasets:
@@ -106,31 +108,10 @@ def maintenance_totals(datasets) -> dict:
                                     ("renewals", "renewed_m", "renewal")):  # fmt: skip
             out[name] += int(np.sum(kind == which))
             out[metres] += float(length[kind == which].sum())
+        out["possessions"] += len(possessions(ds))
         for j in np.unique(seg):
             intervals.extend(np.diff(np.sort(ds.intervention_mgt.values[seg == j])))
         per_100 += float(length.sum()) / float(ds.mgt[-1]) * 100.0
     out["mean_interval_mgt"] = float(np.mean(intervals)) if intervals else np.nan
     out["tamped_m_per_100_mgt"] = per_100
     return out
-
-
-def costs(totals: dict, tamping_per_m: float, renewal_per_m: float, intervention: float) -> dict:
-    """Costs of one alternative over the horizon (undiscounted, the user's currency).
-
-    Parameters
-    ----------
-    totals : dict
-        `maintenance_totals` of the alternative.
-    tamping_per_m, renewal_per_m : float
-        Cost of tamping and of renewing one metre of track.
-    intervention : float
-        Cost of the intervention itself.
-    """
-    tamping = tamping_per_m * totals["tamped_m"]
-    renewal = renewal_per_m * totals["renewed_m"]
-    return {
-        "tamping_cost": tamping,
-        "renewal_cost": renewal,
-        "intervention_cost": intervention,
-        "life_cycle_cost": tamping + renewal + intervention,
-    }

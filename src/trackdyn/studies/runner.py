@@ -21,6 +21,7 @@ from scipy import signal
 
 from trackdyn.errors import Failure
 from trackdyn.options import RunOptions
+from trackdyn.track.survey import GeometryFormat
 from trackdyn.units import name_unit
 
 SPECTRUM_FREQUENCY = np.arange(0.0, 40.0 + 1e-9, 0.125)
@@ -32,12 +33,14 @@ class TrackRef:
     """Where a worker finds the track: CSV paths, or None for the built-in example.
 
     ``case`` names a §5.4.1 excitation case applied after linearisation (see
-    `trackdyn.track.excitation`); ``"iv"`` is the track as measured.
+    `trackdyn.track.excitation`); ``"iv"`` is the track as measured. ``geometry_format``
+    says what the geometry file holds (`trackdyn.track.survey`; None: a profile).
     """
 
     geometry: str | None = None
     supports: str | None = None
     case: str = "iv"
+    geometry_format: GeometryFormat | None = None
 
 
 @dataclass(frozen=True)
@@ -73,17 +76,18 @@ Result = tuple[dict, Statistics | Failure]
 
 
 @functools.lru_cache(maxsize=8)
-def _track(geometry, supports):
+def _track(geometry, supports, geometry_format):
     from trackdyn.data import load_track
 
-    return load_track(geometry, supports)
+    return load_track(geometry, supports, geometry_format)
 
 
 @functools.lru_cache(maxsize=32)
 def _linearised(ref: TrackRef, static_load: float, delta: float, extrapolate: bool):
     from trackdyn.track.excitation import excitation_case
 
-    lin = _track(ref.geometry, ref.supports).linearise(static_load, delta, extrapolate=extrapolate)
+    track = _track(ref.geometry, ref.supports, ref.geometry_format)
+    lin = track.linearise(static_load, delta, extrapolate=extrapolate)
     return excitation_case(lin, ref.case)
 
 

@@ -34,12 +34,17 @@ class Geometry:
         Vertical profile of the left and right rail [m].
     where : str
         Source name for error messages.
+    notes : tuple of (str, str)
+        What was done to the file's columns to give this profile, and what it lacks, by
+        topic (``kind``, ``gaps``, ``direction``, ``sign``; `trackdyn.track.survey`); empty
+        for a profile read as it is.
     """
 
     distance: np.ndarray
     left: np.ndarray
     right: np.ndarray
     where: str = "geometry"
+    notes: tuple = ()
 
     def __post_init__(self):
         d = check_series(self.distance, min_points=2, where=self.where)

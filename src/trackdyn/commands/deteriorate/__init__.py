@@ -10,8 +10,9 @@ from __future__ import annotations
 
 import dataclasses
 
+from trackdyn.commands.geometry_notes import PREFIX, geometry_notes
 from trackdyn.commands.staging import Record, output_folder
-from trackdyn.commands.tables import deterioration_table, forecast_table
+from trackdyn.commands.tables import deterioration_table, forecast_table, frame_table
 from trackdyn.errors import require_workers
 from trackdyn.progress import note
 from trackdyn.provenance import recorded
@@ -56,14 +57,25 @@ def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> 
         plan = plan_forecast(spec, base, tasks)
     with output_folder(out, "deteriorate", overwrite, record) as stage:
         datasets = run_sections(tasks, workers=workers, scheduler=scheduler, progress=not serial)
+        for ds in datasets:
+            attrs = ds.attrs.items()
+            told = ((k.removeprefix(PREFIX), v) for k, v in attrs if k.startswith(PREFIX))
+            geometry_notes(told, f"section {ds.attrs['section']}")
         record.headline = {"sections": summary(datasets).to_dict(orient="records")}
         files = write_outputs(datasets, stage)
+        forecast = table = None
         if plan is not None:
-            table = _forecast(plan, tasks, workers, scheduler, stage, files, record)
+            forecast, table = _forecast(plan, tasks, workers, scheduler, stage, files, record)
+        deferred = None
+        if spec.plan is not None:
+            deferred = _plan(spec, tasks, datasets, forecast, workers, scheduler, stage, files,
+                             record)  # fmt: skip
     title = f"Deterioration, {spec.run.model}: {len(datasets)} section(s)"
     console.print(deterioration_table(summary(datasets), title))
     if plan is not None:
         console.print(forecast_table(table, f"First tamping, {plan.members.count} members"))
+    if deferred is not None and len(deferred):
+        console.print(frame_table(deferred, "Deferred by the plan's cap"))
     note(f"wrote {len(files)} files (deterioration_*.nc, CSV tables, figures) to {out}")
     note("\n".join(record.lines()), 2)
 
@@ -77,4 +89,22 @@ def _forecast(plan, tasks, workers, scheduler, stage, files, record):
     written, table = write_forecast(forecast, [t.section.name for t in tasks], stage)
     files += written
     record.headline["forecast_first_tamping_mgt"] = headline(table)
-    return table
+    return forecast, table
+
+
+def _plan(spec, tasks, datasets, forecast, workers, scheduler, stage, files, record):
+    """Make the ``[plan]``, run it, write its files into ``stage`` (their names added to
+    ``files``) and its headline into ``record``; return what its cap deferred."""
+    from trackdyn.commands.deteriorate.plan import run_plan, write_plan
+
+    result = run_plan(spec, tasks, datasets, forecast, workers=workers, scheduler=scheduler)
+    plan, lines, _, rules = result
+    written, deferred = write_plan(spec, result, stage)
+    files += written
+    record.headline["plan"] = {
+        "stretches": len(plan.stretches),
+        "tamped_m": sum(s.length(lines[s.section]) for s in plan.stretches),
+        "deferred": len(plan.deferred),
+        "years": rules.years,
+    }
+    return deferred

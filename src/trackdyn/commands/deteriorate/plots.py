@@ -339,3 +339,49 @@ def plot_reach_probability(table, ax=None, *, title: str = "") -> Figure:
     fig.colorbar(mesh, ax=list(axes), label="probability of the first tamping by then [-]")
     fig.suptitle(title or "Probability of reaching the threshold")
     return fig  # a new figure is laid out by matplotlib's constrained layout
+
+
+def plot_plan(table, deferred, bounds, ax=None, *, title: str = "") -> Figure:
+    """A maintenance plan along the line: each year's stretches as bars from their start to
+    their end (sections end to end in the order of the sections list), coloured by the
+    probability of needing tamping where an ensemble gives it; what a cap deferred outlined
+    in red in the year it was deferred from.
+
+    Parameters
+    ----------
+    table, deferred : pandas.DataFrame
+        ``plan.csv`` and ``plan_deferred.csv``
+        (`trackdyn.commands.deteriorate.plan.plan_tables`).
+    bounds : list of (str, float, float)
+        Each section's name, start and end [m], in order.
+    ax : matplotlib.axes.Axes, optional
+        Where to draw; default: a new figure.
+    title : str
+        Figure title.
+    """
+    fig, axis = panels(ax, figsize=(12, 5))
+    offset, offsets = 0.0, {}
+    for name, start, end in bounds:
+        offsets[name] = offset - start
+        axis.axvline(offset, color="k", lw=0.8)
+        axis.text(offset + (end - start) / 2, 1.01, name, ha="center", va="bottom", fontsize=8,
+                  transform=axis.get_xaxis_transform())  # fmt: skip
+        offset += end - start
+    colours = plt.cm.viridis_r
+    outlined = {"facecolor": "none", "edgecolor": "tab:red", "hatch": "//", "label": "deferred"}
+    for frame, style in ((table, {}), (deferred, outlined)):
+        for row in frame.itertuples(index=False):
+            p = getattr(row, "probability", np.nan)
+            shade = {} if style else {"color": colours(p if np.isfinite(p) else 1.0)}
+            axis.barh(row.year, row.end_m - row.start_m, left=offsets[row.section] + row.start_m,
+                      height=0.6, **style, **shade)  # fmt: skip
+            style = {k: v for k, v in style.items() if k != "label"}
+    if len(deferred):
+        axis.legend(loc="upper right", fontsize=8)
+    years = [*table["year"], *deferred["year"], 1]
+    axis.set_xlim(0.0, offset)
+    axis.set_ylim(max(years) + 0.5, 0.5)
+    axis.set_xlabel("distance along the line, sections end to end [m]")
+    axis.set_ylabel("plan year")
+    fig.suptitle(title or "Maintenance plan")
+    return finished(fig, ax)

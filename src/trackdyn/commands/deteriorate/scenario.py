@@ -55,6 +55,17 @@ parameters = { K_s = { cov = 0.3 } }  # or spreads per parameter (SI): { cov = .
 # annual_growth = 0.02          # with horizon_years: growth of annual_mgt per year [-]
 # annual_growth_sd = 0.01       # its spread between members [-]
 
+[plan]                          # omit: no plan; with it, the plan and the run that follows it
+# years = 10                    # planning years; default the horizon's ([maintenance]
+                                # horizon_years and annual_mgt are needed)
+min_stretch_m = 200             # the shortest stretch a machine tamps
+bridge_gap_m = 100              # gaps up to this between due stretches are tamped with them
+# min_probability = 0.5         # with [forecast]: the share of members that makes it due
+# cap_m_per_year = 2000         # most metres tamped a year; or budget_per_year (currency)
+# tamping_per_m = 10            # the plan's costs: per metre tamped, per stretch, the unit
+# per_possession = 500
+# currency = "EUR"
+
 [track]                         # omit for the built-in example section
 geometry = "geometry.csv"
 supports = "supports.csv"
@@ -76,6 +87,7 @@ from pydantic import (
     Field,
     NonNegativeFloat,
     PositiveFloat,
+    PositiveInt,
     StrictFloat,
     field_serializer,
     field_validator,
@@ -88,6 +100,7 @@ from trackdyn.deterioration.options import LoopOptions
 from trackdyn.errors import TrackdynInputError
 from trackdyn.limits import MAX_SPEED_KMH, MAX_TOTAL_MGT
 from trackdyn.options import RunOptions, Strict, load_toml, vehicle_source
+from trackdyn.track.survey import GeometryFormat
 
 
 def _default(name: str):
@@ -149,12 +162,13 @@ class SettlementSpec(Strict):
         return value
 
 
-class TrackSectionsSpec(Strict):
+class TrackSectionsSpec(GeometryFormat):
     """``[track]``: ``geometry`` and ``supports`` CSV files, or a ``sections`` CSV list;
     ``zones``, a zone table (`trackdyn.deterioration.zones`; in a sections list, its
     ``zones`` column); ``rail`` section for the bending stiffness EI; ``start``, ``"tamped"``, ``"as
     measured"`` or ``"as surveyed"`` (default: tamped for the built-in example, as
-    measured for files)."""
+    measured for files); what the geometry files hold (`trackdyn.track.survey.GeometryFormat`,
+    the same for every section of a list)."""
 
     geometry: Path | None = None
     supports: Path | None = None
@@ -185,6 +199,12 @@ class MaintenanceSpec(MaintenanceOptions):
     def _both_or_neither(self):
         if (self.horizon_years is None) != (self.annual_mgt is None):
             raise ValueError("give horizon_years and annual_mgt together, or neither")
+        return self
+
+    @model_validator(mode="after")
+    def _not_planned(self):
+        if "planned" in self.model_fields_set:
+            raise ValueError("planned is written by a [plan] table, not given")
         return self
 
     def options(self) -> MaintenanceOptions:
@@ -238,13 +258,47 @@ class ForecastSpec(Strict):
     annual_growth_sd: float = Field(0.0, ge=0.0, lt=1.0)
 
 
+class PlanSpec(Strict):
+    """``[plan]``: planning ``years`` (default the horizon's), ``min_stretch_m`` and
+    ``bridge_gap_m`` [m], ``min_probability`` [-] (with ``[forecast]``), the yearly caps
+    ``cap_m_per_year`` [m] and ``budget_per_year`` [currency], the costs ``tamping_per_m``
+    [currency/m] and ``per_possession`` [currency] in ``currency``
+    (`trackdyn.deterioration.planning`)."""
+
+    years: PositiveInt | None = None
+    min_stretch_m: NonNegativeFloat = 200.0
+    bridge_gap_m: NonNegativeFloat = 0.0
+    min_probability: float = Field(0.5, gt=0.0, le=1.0)
+    cap_m_per_year: PositiveFloat | None = None
+    budget_per_year: PositiveFloat | None = None
+    tamping_per_m: NonNegativeFloat = 0.0
+    per_possession: NonNegativeFloat = 0.0
+    currency: str = "cu"
+
+    @field_validator("currency")
+    @classmethod
+    def _currency(cls, value):
+        from trackdyn.units import currency
+
+        return currency(value)
+
+    @model_validator(mode="after")
+    def _fits(self):
+        if self.cap_m_per_year is not None and self.cap_m_per_year < self.min_stretch_m:
+            raise ValueError(f"cap_m_per_year {self.cap_m_per_year:g} m is below min_stretch_m "
+                             f"{self.min_stretch_m:g} m: no stretch fits")  # fmt: skip
+        if self.budget_per_year is not None and self.tamping_per_m + self.per_possession == 0:
+            raise ValueError("budget_per_year needs tamping_per_m or per_possession")
+        return self
+
+
 MOVED_TO_RUN = ("model", "delta", "dt_s")
 """Top-level keys of earlier scenario files that now belong in ``[run]``."""
 
 
 class DeteriorationScenario(Strict):
     """A deterioration scenario: ``[run]`` options and the traffic, law, loop and track;
-    optionally maintenance and an ensemble forecast."""
+    optionally maintenance, an ensemble forecast and a maintenance plan."""
 
     run: RunOptions = RunOptions()
     traffic: list[TrafficSpec] = Field(default_factory=lambda: list(DEFAULT_TRAFFIC))
@@ -253,6 +307,27 @@ class DeteriorationScenario(Strict):
     track: TrackSectionsSpec = TrackSectionsSpec()
     maintenance: MaintenanceSpec | None = None
     forecast: ForecastSpec | None = None
+    plan: PlanSpec | None = None
+
+    @model_validator(mode="after")
+    def _plan_in_years(self):
+        m, p = self.maintenance, self.plan
+        if p is None:
+            return self
+        if m is None or m.horizon_years is None:
+            raise ValueError("[plan] needs [maintenance] with horizon_years and annual_mgt")
+        if p.years is not None and p.years > m.horizon_years:
+            raise ValueError(f"[plan] years {p.years} is beyond the horizon "
+                             f"({m.horizon_years:g} years)")  # fmt: skip
+        return self
+
+    @property
+    def plan_years(self) -> int:
+        """Planning years of ``[plan]`` (the horizon's, whole, by default) [-]."""
+        assert self.plan is not None and self.maintenance is not None  # the model's check
+        given, horizon = self.plan.years, self.maintenance.horizon_years
+        assert horizon is not None
+        return given if given is not None else max(1, int(horizon))
 
     @model_validator(mode="after")
     def _growth_in_years(self):
@@ -308,8 +383,9 @@ class DeteriorationScenario(Strict):
     def _without_forecast(self, handler):
         # a scenario without [forecast] records its options as it did before the table
         data = handler(self)
-        if self.forecast is None:
-            data.pop("forecast", None)
+        for table in ("forecast", "plan"):
+            if getattr(self, table) is None:
+                data.pop(table, None)
         return data
 
     @field_serializer("loop", mode="wrap")

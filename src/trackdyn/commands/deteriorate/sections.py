@@ -32,13 +32,14 @@ from trackdyn.deterioration.zones import read_zones
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import read_table
 from trackdyn.provenance import note_read
+from trackdyn.track.survey import GeometryFormat
 
 NAME = re.compile(r"^[A-Za-z0-9_.-]*[A-Za-z0-9][A-Za-z0-9_.-]*$")
 """Section names become parts of file names: letters, digits, ``_``, ``-`` and ``.``, with
 at least one letter or digit (not ``..``)."""
 
 
-def read_sections(path) -> list[Section]:
+def read_sections(path, geometry_format: GeometryFormat | None = None) -> list[Section]:
     """Read a sections CSV (``name,geometry,supports[,zones]``, paths relative to the CSV
     file; an empty ``zones`` cell: all open track).
 
@@ -46,6 +47,8 @@ def read_sections(path) -> list[Section]:
     ----------
     path : path
         The CSV file.
+    geometry_format : GeometryFormat, optional
+        What every section's geometry file holds; None: a profile.
     """
     path = Path(path)
     frame = read_table(path, ("name", "geometry", "supports"), ("zones",))
@@ -69,7 +72,8 @@ def read_sections(path) -> list[Section]:
             if not isinstance(value, str) or not file.is_file():
                 raise TrackdynInputError(f"{line}: {key} file {value!r} not found")
             files.append(str(file.resolve()))
-        sections.append(Section(name, *files))
+        geometry, supports, zones = files
+        sections.append(Section(name, geometry, supports, zones, geometry_format))
     return sections
 
 
@@ -86,7 +90,7 @@ def sections_of(spec, base: Path) -> list[Section]:
     """
     t = spec.track
     if t.sections is not None:
-        return read_sections(base / t.sections)
+        return read_sections(base / t.sections, t.geometry_format())
     zones = None
     if t.zones is not None:
         if not (base / t.zones).is_file():
@@ -99,7 +103,8 @@ def sections_of(spec, base: Path) -> list[Section]:
         if not file.is_file():
             raise TrackdynInputError(f"track.{key}: {file}: no such file")
     name = re.sub(r"[^A-Za-z0-9_.-]", "_", files[0].stem)
-    return [Section(name, str(files[0].resolve()), str(files[1].resolve()), zones)]
+    geometry, supports = (str(f.resolve()) for f in files)
+    return [Section(name, geometry, supports, zones, t.geometry_format())]
 
 
 def section_tasks(spec, base: Path, progress: bool = False) -> list[SectionTask]:

@@ -5,9 +5,16 @@ maintenance under alternatives, side by side with their costs.
 kind = "interventions"
 scenario = "deteriorate.toml"    # a trackdyn deteriorate scenario with [maintenance]
 
-[costs]                          # the user's currency, undiscounted over the horizon
+[costs]
+currency = "EUR"                 # the costs' unit in every name (default "cu", currency units)
 tamping_per_m = 10.0             # per metre of segment tamped
 renewal_per_m = 0.0              # per metre of segment whose ballast is renewed
+per_possession = 0.0             # per possession: each tamping run, whatever its length
+discount_rate = 0.0              # [-/year]; 0: undiscounted (needs annual_mgt otherwise)
+# annual_mgt = 10                # [MGT/year]; default the scenario's [maintenance] annual_mgt
+# residual = "end-state work"    # default "condition": each segment's used share of a
+                                 # tamping; "end-state work": those at the reference; "none"
+# reference_sd_mm = 2.0          # its common reference; default the scenario's threshold
 
 [[alternative]]
 name = "base"                    # no changes: the scenario as it is
@@ -15,6 +22,7 @@ name = "base"                    # no changes: the scenario as it is
 [[alternative]]
 name = "soft-spot-fixed"
 cost = 5000.0                    # of the intervention itself
+cost_year = 0.0                  # when it is spent [year from the start]
 supports_scale = [{ from_m = 560, to_m = 580, factor = 2.0 }]   # section = "..." optional
 # settlement_scale = [{ from_m = 500, to_m = 700, factor = 0.56 }]  # settlement rate there
 # settlement_overrides = { alpha = 0.3 }    # merged into [settlement] overrides
@@ -24,6 +32,7 @@ supports_scale = [{ from_m = 560, to_m = 580, factor = 2.0 }]   # section = "...
 
 Every alternative runs every section of the scenario with the same rate-field and
 maintenance seeds, so an alternative without changes gives the scenario's own results.
+The costs, their present value and the residual rule are `trackdyn.studies.life_cycle`'s.
 """
 
 from __future__ import annotations
@@ -41,6 +50,7 @@ from pydantic import (
     NonNegativeFloat,
     PositiveFloat,
     StrictFloat,
+    field_validator,
     model_validator,
 )
 
@@ -61,11 +71,12 @@ from trackdyn.options import Strict, load_toml, parse
 from trackdyn.progress import note
 from trackdyn.studies.interventions import (
     Scale,
-    costs,
     maintenance_totals,
     scale_supports,
     support_extent,
 )
+from trackdyn.studies.life_cycle import Rates, costs, discounted_work, end_state, end_totals
+from trackdyn.units import currency, money_name
 
 MIN_SCALE, MAX_SCALE = 0.01, 100.0
 """Plausible range of a ``supports_scale`` or ``settlement_scale`` factor [-]: a hundredth
@@ -95,12 +106,14 @@ class RangeScale(Strict):
 
 
 class Alternative(Strict):
-    """``[[alternative]]``: a ``name``, its ``cost`` and the changes it makes."""
+    """``[[alternative]]``: a ``name``, its ``cost`` [currency] spent at ``cost_year``
+    [year from the start] and the changes it makes."""
 
     model_config = ConfigDict(strict=True)
 
     name: str = Field(pattern=NAME.pattern)
     cost: NonNegativeFloat = 0.0
+    cost_year: NonNegativeFloat = 0.0
     supports_scale: list[RangeScale] = Field(default_factory=list)
     settlement_scale: list[RangeScale] = Field(default_factory=list)
     settlement_overrides: dict[str, StrictFloat] = Field(default_factory=dict)
@@ -109,12 +122,44 @@ class Alternative(Strict):
 
 
 class Costs(Strict):
-    """``[costs]``: ``tamping_per_m`` and ``renewal_per_m`` (the user's currency per m)."""
+    """``[costs]``: the ``currency`` (default ``"cu"``, currency units, unnamed), the costs
+    ``tamping_per_m`` and ``renewal_per_m`` [currency/m] and ``per_possession``
+    [currency], the ``discount_rate`` [-/year] with ``annual_mgt`` [MGT/year] (default the
+    scenario's ``[maintenance] annual_mgt``), and the ``residual`` rule (``"condition"``,
+    default, ``"end-state work"`` or ``"none"``) with its ``reference_sd_mm`` [mm] (default the
+    scenario's ``[loop] threshold_sd_mm``); `trackdyn.studies.life_cycle`."""
 
     model_config = ConfigDict(strict=True)
 
+    currency: str = "cu"
     tamping_per_m: NonNegativeFloat = 0.0
     renewal_per_m: NonNegativeFloat = 0.0
+    per_possession: NonNegativeFloat = 0.0
+    discount_rate: float = Field(0.0, ge=0.0, lt=1.0)
+    annual_mgt: PositiveFloat | None = None
+    residual: Literal["condition", "end-state work", "none"] = "condition"
+    reference_sd_mm: PositiveFloat | None = None
+
+    @field_validator("currency")
+    @classmethod
+    def _currency(cls, value):
+        return currency(value)
+
+    def rates(self, spec: DeteriorationScenario) -> Rates:
+        """The `Rates` of these costs on the scenario ``spec`` (its traffic per year and
+        threshold where these give none)."""
+        m = spec.maintenance
+        annual = self.annual_mgt or (m.annual_mgt if m is not None else None)
+        if self.discount_rate > 0 and annual is None:
+            raise TrackdynInputError("[costs] discount_rate needs annual_mgt ([costs] "
+                                     "annual_mgt or the scenario's [maintenance])")  # fmt: skip
+        reference = self.reference_sd_mm or spec.loop.threshold_sd_mm
+        tamped = None
+        if self.residual == "condition" and m is not None:  # the tamping model's σ' at σ_ref
+            tamped = m.recovery_offset_mm + m.recovery_slope * reference
+        return Rates(self.tamping_per_m, self.renewal_per_m, self.per_possession,
+                     self.discount_rate, annual,
+                     None if self.residual == "none" else reference, tamped)  # fmt: skip
 
 
 class InterventionsStudy(Strict):
@@ -202,6 +247,9 @@ def alternative_tasks(study: InterventionsStudy, path, folder: Path):
     spec, base = load_deterioration(scenario_path)
     if spec.maintenance is None:
         raise TrackdynInputError(f"{scenario_path}: no [maintenance] table: nothing to compare")
+    if spec.plan is not None:
+        raise TrackdynInputError(f"{scenario_path}: [plan] is trackdyn deteriorate's; an "
+                                 "interventions study compares without it")  # fmt: skip
     tasks = []
     for alt in study.alternative:
         where = f"{path}: alternative {alt.name!r}"
@@ -236,7 +284,8 @@ def run_alternatives(labelled, *, workers=None, scheduler=None, progress=False) 
     return datasets
 
 
-def compare(study: InterventionsStudy, names, datasets) -> tuple[pd.DataFrame, pd.DataFrame]:
+def compare(study: InterventionsStudy, names, datasets,
+            rates: Rates) -> tuple[pd.DataFrame, pd.DataFrame]:  # fmt: skip
     """The comparison (one row per alternative) and the life cycle of every segment.
 
     Parameters
@@ -247,16 +296,31 @@ def compare(study: InterventionsStudy, names, datasets) -> tuple[pd.DataFrame, p
         The alternative of each Dataset.
     datasets : list of xarray.Dataset
         The sections' results, in the order of ``names``.
+    rates : Rates
+        The costs (`Costs.rates`).
+
+    Returns
+    -------
+    comparison : pandas.DataFrame
+        Per alternative: `maintenance_totals`, `end_totals` and the `costs`, named with
+        the currency (`trackdyn.units.money_name`).
+    segments : pandas.DataFrame
+        Per alternative and segment: `life_cycle_table` and the `end_state`.
     """
     rows, segments = [], []
-    c = study.costs
+    code = study.costs.currency
     for alt in study.alternative:
         mine = [ds for n, ds in zip(names, datasets, strict=True) if n == alt.name]
-        totals = maintenance_totals(mine)
-        rows.append({"alternative": alt.name, **totals,
-                     **costs(totals, c.tamping_per_m, c.renewal_per_m, alt.cost)})  # fmt: skip
+        work = [discounted_work(ds, rates) for ds in mine]
+        summed = {k: sum(w[k] for w in work) for k in work[0]}
+        money = costs(summed, rates, alt.cost, alt.cost_year)
+        rows.append({"alternative": alt.name, **maintenance_totals(mine),
+                     **end_totals(mine, rates.reference_sd_mm),
+                     **{money_name(k, code): v for k, v in money.items()}})  # fmt: skip
         for ds in mine:
-            segments.append(life_cycle_table(ds).assign(alternative=alt.name))
+            table = life_cycle_table(ds)
+            end = end_state(ds, rates.reference_sd_mm, rates.tamped_sd_mm)
+            segments.append(pd.concat([table, end], axis=1).assign(alternative=alt.name))
     frame = pd.concat(segments, ignore_index=True)
     return pd.DataFrame(rows), frame[["alternative", *frame.columns[:-1]]]
 
@@ -275,18 +339,28 @@ def _plan(spec, base, labelled):
     return plan_forecast(spec, base, first)
 
 
-def _spread(study, labelled, plan, workers, scheduler) -> pd.DataFrame:
+def _spread(study, labelled, plan, rates, workers, scheduler) -> pd.DataFrame:
     """Run every alternative on every member; `cost_spread` of their life-cycle costs."""
     pairs, member = member_labelled(labelled, plan)
     datasets = run_alternatives(pairs, workers=workers, scheduler=scheduler, progress=True)
     names = np.array([alt for alt, _ in pairs])
     alternatives = [alt.name for alt in study.alternative]
-    costs = np.empty((len(plan.members.growth), len(alternatives)))
-    for m in range(costs.shape[0]):
+    member_costs = np.empty((len(plan.members.growth), len(alternatives)))
+    for m in range(member_costs.shape[0]):
         mine = np.flatnonzero(member == m)
-        table, _ = compare(study, list(names[mine]), [datasets[i] for i in mine])
-        costs[m] = table.set_index("alternative").loc[alternatives, "life_cycle_cost"]
-    return cost_spread(costs, alternatives)
+        table, _ = compare(study, list(names[mine]), [datasets[i] for i in mine], rates)
+        lcc = money_name("life_cycle_cost", study.costs.currency)
+        member_costs[m] = table.set_index("alternative").loc[alternatives, lcc]
+    return cost_spread(member_costs, alternatives, study.costs.currency)
+
+
+def _with_currency(table: pd.DataFrame, code: str):
+    """The comparison as a Dataset, its costs with the currency as their unit."""
+    ds = table.set_index("alternative").to_xarray()
+    for name in ds.data_vars:
+        if str(name).endswith(f"_{code}"):
+            ds[name].attrs["currency"] = code
+    return ds
 
 
 def interventions(path, out, overwrite: bool, workers, scheduler, console) -> None:
@@ -310,8 +384,11 @@ def interventions(path, out, overwrite: bool, workers, scheduler, console) -> No
     """
     study, _ = load_toml(InterventionsStudy, path)
     require_workers(workers)
+    code = study.costs.currency
     with tempfile.TemporaryDirectory(prefix="trackdyn-interventions-") as scratch:
         labelled, spec, base = alternative_tasks(study, path, Path(scratch))
+        with named(str(path)):
+            rates = study.costs.rates(spec)
         plan = _plan(spec, base, labelled)
         title = f"trackdyn study: interventions, {len(study.alternative)} alternatives"
         record = Record(title, {"study": path, "scenario": scenario_file(study, path)},
@@ -320,24 +397,23 @@ def interventions(path, out, overwrite: bool, workers, scheduler, console) -> No
         with output_folder(out, "study", overwrite, record) as stage:
             datasets = run_alternatives(labelled, workers=workers, scheduler=scheduler,
                                         progress=True)  # fmt: skip
-            table, segments = compare(study, [alt for alt, _ in labelled], datasets)
+            table, segments = compare(study, [alt for alt, _ in labelled], datasets, rates)
             record.headline = {"alternatives": table.to_dict(orient="records")}
-            write_netcdf(table.set_index("alternative").to_xarray(),
-                         stage / "interventions_compared.nc")  # fmt: skip
+            write_netcdf(_with_currency(table, code), stage / "interventions_compared.nc")
             table.to_csv(stage / "interventions_compared.csv", index=False, float_format="%.6g")
             segments.to_csv(stage / "interventions_segments.csv", index=False,
                             float_format="%.6g")  # fmt: skip
             title = f"Interventions over {spec.horizon_mgt:g} MGT"
-            save(plot_comparison(table, title=title), stage / "interventions_compared.png")
+            save(plot_comparison(table, code, title=title), stage / "interventions_compared.png")
             spread = None
             if plan is not None:
-                spread = _spread(study, labelled, plan, workers, scheduler)
+                spread = _spread(study, labelled, plan, rates, workers, scheduler)
                 record.headline["life_cycle_cost_spread"] = spread.to_dict(orient="records")
                 spread.to_csv(stage / SPREAD_FILE, index=False, float_format="%.6g")
-    console.print(frame_table(table, f"Interventions over {spec.horizon_mgt:g} MGT"))
+    console.print(frame_table(table, f"Interventions over {spec.horizon_mgt:g} MGT", code))
     if spread is not None:
         console.print(frame_table(spread, f"Life-cycle cost over {len(plan.members.growth)} "
-                                          "forecast members"))  # fmt: skip
+                                          "forecast members", code))  # fmt: skip
     written = ", ".join(["interventions_compared.csv/.nc/.png", "interventions_segments.csv",
                          *([SPREAD_FILE] if spread is not None else [])])  # fmt: skip
     note(f"wrote {written} to {out}")

@@ -7,39 +7,49 @@ import numpy as np
 import pandas as pd
 
 from trackdyn.commands.plots import TAB10, Figure, finished, panels, plt
+from trackdyn.units import money_name
 
 
-def plot_comparison(table: pd.DataFrame, ax=None, *, title: str = "") -> Figure:
-    """Bars per alternative: tampings (renewals hatched on top), mean interval [MGT]
-    ("none" where no segment had two interventions), life-cycle cost (the intervention's
-    own cost hatched on top).
+def plot_comparison(table: pd.DataFrame, code: str, ax=None, *, title: str = "") -> Figure:
+    """Bars per alternative: tampings (renewals hatched on top), the D1 SD it leaves at
+    the horizon (the worst segment's, the length-weighted mean dotted) [mm], life-cycle
+    cost [currency] (the intervention's own cost and the residual, the end state's work,
+    hatched on top).
 
     Parameters
     ----------
     table : pandas.DataFrame
         The comparison, one row per alternative (`trackdyn.commands.interventions.compare`).
+    code : str
+        The currency of its costs (`trackdyn.units.money_name`).
     ax : array of 3 matplotlib Axes, optional
         Where to draw the three panels; default: a new figure.
     title : str
         Figure title.
     """
-    bars = (
-        ("tampings", "renewals", "tampings, renewals hatched [-]"),
-        ("mean_interval_mgt", None, "mean interval [MGT]"),
-        ("life_cycle_cost", "intervention_cost", "life-cycle cost, intervention hatched"),
+    lcc, own, residual = (
+        money_name(k, code) for k in ("life_cycle_cost", "intervention_cost", "residual_cost")
     )
+    bars = (  # the bar, its hatched top, the axis label
+        (table["tampings"] + table["renewals"], table["renewals"],
+         "tampings, renewals hatched [-]"),
+        (table["d1_sd_horizon_max_mm"], 0.0 * table["tampings"],
+         "D1 SD at the horizon, worst segment [mm]"),
+        (table[lcc], table[own] + table[residual],
+         f"life-cycle cost [{code}],\nintervention and residual hatched"),
+    )  # fmt: skip
     fig, axes = panels(ax, 1, 3, figsize=(12, 4))
     colours = np.array([TAB10[i % len(TAB10)] for i in range(len(table))])
     names = table["alternative"]
-    for a, (key, top, label) in zip(axes, bars, strict=True):
-        total = table[key] + (table[top] if key == "tampings" else 0.0)
-        hatched = table[top] if top else 0.0 * total
+    for k, (a, (total, hatched, label)) in enumerate(zip(axes, bars, strict=True)):
         a.bar(names, total - hatched, color=colours)
         shown = hatched > 0
         a.bar(names[shown], hatched[shown], bottom=(total - hatched)[shown], color=colours[shown],
               edgecolor="k", hatch="//")  # fmt: skip
-        for i in np.flatnonzero(np.isnan(total.to_numpy())):  # e.g. no two tampings
-            a.annotate("none", (i, 0.0), ha="center", va="bottom", fontsize=8)
+        if k == 1:
+            a.scatter(names, table["d1_sd_horizon_mean_mm"], marker="_", s=400, color="k",
+                      label="length-weighted mean")  # fmt: skip
+            a.legend(fontsize=8)
         a.set_ylabel(label)
         a.grid(axis="y", alpha=0.3)
         plt.setp(a.get_xticklabels(), rotation=25, ha="right")

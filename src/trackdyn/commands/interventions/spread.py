@@ -15,6 +15,7 @@ import pandas as pd
 
 from trackdyn.forecast.ensemble import member_tasks
 from trackdyn.forecast.summary import quantile_row
+from trackdyn.units import money_name
 
 
 def member_labelled(labelled, plan) -> tuple[list, np.ndarray]:
@@ -35,7 +36,7 @@ def member_labelled(labelled, plan) -> tuple[list, np.ndarray]:
     return pairs, np.array(member)
 
 
-def cost_spread(costs: np.ndarray, alternatives) -> pd.DataFrame:
+def cost_spread(costs: np.ndarray, alternatives, code: str) -> pd.DataFrame:
     """Each alternative's life-cycle cost over the members and its chance to be cheapest.
 
     Parameters
@@ -44,12 +45,14 @@ def cost_spread(costs: np.ndarray, alternatives) -> pd.DataFrame:
         (members, alternatives) life-cycle cost [the study's currency].
     alternatives : list of str
         The alternatives' names, in the order of ``costs``' columns.
+    code : str
+        The currency, the last part of the costs' names (`trackdyn.units.money_name`).
 
     Returns
     -------
     pandas.DataFrame
-        Columns ``alternative``, ``life_cycle_cost_p10``, ``_p50``, ``_p90``, ``_mean``,
-        ``probability_cheapest`` [-] and ``members``.
+        Columns ``alternative``, ``life_cycle_cost_p10_<currency>``, ``_p50_``, ``_p90_``,
+        ``_mean_``, ``probability_cheapest`` [-] and ``members``.
     """
     lowest = costs == costs.min(axis=1, keepdims=True)
     share = (lowest / lowest.sum(axis=1, keepdims=True)).mean(axis=0)
@@ -57,6 +60,7 @@ def cost_spread(costs: np.ndarray, alternatives) -> pd.DataFrame:
     for a, name in enumerate(alternatives):
         q = quantile_row(costs[:, a])
         rows.append({"alternative": name,
-                     **{f"life_cycle_cost_{k}": q[k] for k in ("p10", "p50", "p90", "mean")},
+                     **{money_name(f"life_cycle_cost_{k}", code): q[k]
+                        for k in ("p10", "p50", "p90", "mean")},
                      "probability_cheapest": float(share[a]), "members": q["members"]})  # fmt: skip
     return pd.DataFrame(rows)

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from trackdyn.commands.geometry_notes import geometry_notes
 from trackdyn.commands.netcdf import write_netcdf
 from trackdyn.commands.plots import example_marks, save
 from trackdyn.commands.run.plots import (
@@ -80,6 +81,8 @@ def scenario_record(title: str, scenario, spec, base: Path, role: str = "scenari
     source = spec.vehicle.source(base)
     inputs["vehicle"] = vehicle_file(source)
     options = {f"run_{k}": v for k, v in spec.run.model_dump().items()}
+    given = spec.track.geometry_format().model_dump(exclude_defaults=True)
+    options.update({f"track_{k}": v for k, v in given.items()})
     options["vehicle_source"] = str(source)
     options.update({f"vehicle_override_{k}": v for k, v in spec.vehicle.overrides.items()})
     return Record(title, inputs, options)
@@ -149,6 +152,7 @@ def run(scenario, out, overwrite: bool, console) -> None:
     with output_folder(out, "run", overwrite, record) as stage:
         with status("reading the track"):
             trk = spec.track.load(base)
+        geometry_notes(trk.geometry.notes, trk.geometry.where, record.options)
         with named(scenario):
             ds = simulate(vehicle, trk, spec.run, progress=True)
         table = summary(ds)

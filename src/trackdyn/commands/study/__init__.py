@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from trackdyn.commands.geometry_notes import geometry_notes
 from trackdyn.commands.netcdf import write_netcdf
 from trackdyn.commands.plots import save
 from trackdyn.commands.run import scenario_record
@@ -128,6 +129,7 @@ def study(study_file, out, overwrite: bool, workers, scheduler, console) -> None
     title = f"trackdyn study: {spec.kind} study, {spec.run.model}, {len(runs)} runs"
     record = scenario_record(title, study_file, spec, base, role="study")
     record.options.update({"kind": spec.kind, spec.kind: spec.model_dump(mode="json")[spec.kind]})
+    geometry_notes(track.geometry.notes, track.geometry.where, record.options)
     with output_folder(out, "study", overwrite, record) as stage:
         results = run_study(runs, workers=workers, scheduler=scheduler, progress=True)
         table, ds = gather(results)
