@@ -120,7 +120,10 @@ def test_units_written_to_netcdf():
         }
     )
     out = to_cf(ds)
-    assert out.tamped_m_per_100_mgt.attrs == {"units": "m/(100 Mt)", "long_name": "tamped"}
+    assert out.tamped_m_per_100_mgt.attrs == {
+        "units": "m/(100 Mt)",
+        "long_name": "length of track tamped per 100 MGT",  # trackdyn.commands.names
+    }
     assert out.mean_interval_mgt.attrs["units"] == "Mt"
     assert out.factor.attrs["units"] == "1" and out.trigger.attrs["units"] == "Mt"
     assert out.angle.attrs["units"] == "degree"  # UDUNITS knows no "deg"

@@ -22,6 +22,7 @@ import pandas as pd
 
 from trackdyn.errors import TrackdynInputError, check_series
 from trackdyn.limits import MAX_SAMPLE_SPACING
+from trackdyn.provenance import note_read
 from trackdyn.track.support import Curves
 from trackdyn.track.survey import GeometryFormat, surveyed
 from trackdyn.track.track import RAILS, Geometry, Supports
@@ -65,15 +66,19 @@ def _text(path, data: bytes) -> str:
 
 def _bytes(path, size: int = -1) -> bytes:
     """The first ``size`` bytes of the file ``path`` (all: -1); a file that is missing or
-    cannot be read (permissions, a folder) is refused in one line."""
+    cannot be read (permissions, a folder) is refused in one line. Every file trackdyn
+    reads passes here, which notes it for the command's provenance
+    (`trackdyn.provenance.note_read`)."""
     path = Path(path)
     if not path.exists():
         raise TrackdynInputError(f"{path}: no such file")
     try:
         with open(path, "rb") as fh:
-            return fh.read(size)
+            data = fh.read(size)
+        note_read(path)
     except OSError as exc:
         raise TrackdynInputError(f"{path}: cannot read the file ({exc.strerror})") from None
+    return data
 
 
 def _readable(path: Path) -> None:

@@ -10,6 +10,7 @@ import warnings
 from html.parser import HTMLParser
 
 import numpy as np
+import pandas as pd
 import pytest
 import xarray as xr
 from typer.testing import CliRunner
@@ -24,6 +25,8 @@ runner = CliRunner()
 
 SUMMARY_KEYS = {
     "trackdyn_version",
+    "versions",
+    "created",
     "command",
     "command_line",
     "title",
@@ -50,11 +53,37 @@ geometry = "geometry.csv"
 supports = "supports.csv"
 """
 
+MAINTENANCE = """
+[maintenance]
+policy = "threshold"
+"""
+INTERVENTIONS = """
+kind = "interventions"
+scenario = "maintained.toml"
+[[alternative]]
+name = "base"
+[[alternative]]
+name = "later"
+threshold_sd_mm = 2.5
+"""
+COMMAND = {"sensitivity": "study", "interventions": "study"}
+"""The command of each output folder that is not named after its command."""
+
 
 @pytest.fixture(scope="module")
 def outputs(tmp_path_factory):
-    """run, track, study and deteriorate on a 150 m synthetic section: their folders."""
-    base = tmp_path_factory.mktemp("outputs")
+    """run, track, study and deteriorate on a 150 m synthetic section: their folders (the
+    date fixed by SOURCE_DATE_EPOCH, so that a second run can write the same bytes)."""
+    with pytest.MonkeyPatch.context() as env:
+        env.setenv("SOURCE_DATE_EPOCH", EPOCH)
+        yield _outputs(tmp_path_factory.mktemp("outputs"))
+
+
+EPOCH = "1700000000"
+"""A fixed date for the files (2023-11-14 22:13:20 UTC)."""
+
+
+def _outputs(base):
     trk = synthetic_track(150.0, spectrum="fra5", seed=5)
     write_geometry(trk.geometry, base / "geometry.csv")
     write_supports(trk.supports, base / "supports.csv")
@@ -63,13 +92,21 @@ def outputs(tmp_path_factory):
     (base / "study.toml").write_text(
         'kind = "speed"\n' + track + '[run]\nmodel = "2dof"\n[speed]\nspeeds_kmh = [40, 60]\n'
     )
+    (base / "sensitivity.toml").write_text(
+        'kind = "sensitivity"\n' + track + '[run]\nmodel = "2dof"\n[sensitivity]\n'
+        'parameters = ["k1", "mu"]\nfactors = [0.5]\n'
+    )
     (base / "det.toml").write_text(DETERIORATION)
+    (base / "maintained.toml").write_text(DETERIORATION + MAINTENANCE)
+    (base / "interventions.toml").write_text(INTERVENTIONS)
     files = ["--geometry", str(base / "geometry.csv"), "--supports", str(base / "supports.csv")]
     commands = {
         "run": ["run", str(base / "run.toml")],
         "track": ["track", *files],
         "study": ["study", str(base / "study.toml"), "--workers", "1"],
         "deteriorate": ["deteriorate", str(base / "det.toml"), "--workers", "1"],
+        "sensitivity": ["study", str(base / "sensitivity.toml"), "--workers", "1"],
+        "interventions": ["study", str(base / "interventions.toml"), "--workers", "1"],
     }
     folders = {}
     for name, args in commands.items():
@@ -102,14 +139,24 @@ NETCDF = {
     "track": "track.nc",
     "study": "study.nc",
     "deteriorate": "deterioration_geometry.nc",
+    "sensitivity": "study.nc",
+    "interventions": "interventions_compared.nc",
 }
+CHECKER_HEURISTIC = (
+    "§5.1 Independent Latitude, Longitude, Vertical, and Time Axes: Coordinate variable "
+    "'time' should have standard_name='time', found: 'None'"
+)
+"""The one message the checker gives on a run's file: it takes a dimension named ``time``
+for calendar time by its name, where CF 1.8 (4.4) tells a time coordinate by its units
+(``<unit> since <date>``); a run's ``time`` is in seconds from its start."""
 
 
 @pytest.mark.parametrize("command", list(NETCDF))
 def test_netcdf_files_pass_the_cf_checker(outputs, command, tmp_path):
     pytest.importorskip("compliance_checker")
     _, folders = outputs
-    assert cf_messages(folders[command] / NETCDF[command], tmp_path) == []
+    expected = [CHECKER_HEURISTIC] if command == "run" else []
+    assert sorted(set(cf_messages(folders[command] / NETCDF[command], tmp_path))) == expected
 
 
 @pytest.mark.parametrize("command", list(NETCDF))
@@ -126,14 +173,65 @@ def test_netcdf_files_say_what_made_them(outputs, command):
             assert ds.sleeper.attrs["units"] == "m"
     assert attrs["Conventions"] == "CF-1.8"
     assert attrs["trackdyn_version"] == trackdyn.__version__
-    assert attrs["title"] and attrs["history"].startswith(f"trackdyn {command}")
-    if command == "deteriorate":
+    ran = COMMAND.get(command, command)
+    assert attrs["title"] and attrs["history"].startswith(f"2023-11-14T22:13:20Z trackdyn {ran}")
+    if command in ("deteriorate", "interventions"):
         return  # the sections name their own track files
     geometry = base / "geometry.csv"
     assert attrs["input_geometry"] == str(geometry)
     assert attrs["input_geometry_sha256"] == hashlib.sha256(geometry.read_bytes()).hexdigest()
     if command == "run":
         assert attrs["option_run_model"] == "7dof" and attrs["vehicle_mu"] == 0.25  # preset
+
+
+LABELS = {  # a selection by label in each file, and the dimension left
+    "run": ({"contact": "FL"}, "wheel_load", "time"),
+    "track": ({"rail": "left", "band": "D1"}, "sd_loaded", "segment"),
+    "study": ({"speed_kmh": 60.0}, "wheel_load_psd", "frequency"),
+    "deteriorate": ({"rail": "right", "vehicle": "loaded"}, "settlement_by_vehicle", "sleeper"),
+    "sensitivity": ({"parameter": "mu"}, "dyn_load_sd_kN", None),
+    "interventions": ({"alternative": "later"}, "tampings", None),
+}
+
+
+@pytest.mark.parametrize("command", list(NETCDF))
+def test_plain_xarray_selects_by_label(outputs, command):
+    """``xr.open_dataset``, no trackdyn reader: names as coordinates, the swept quantity of
+    a study along ``run`` (made an index with ``set_xindex`` to select on it)."""
+    _, folders = outputs
+    where, name, left = LABELS[command]
+    with xr.open_dataset(folders[command] / NETCDF[command]) as ds:
+        assert set(ds.dims) <= set(ds.indexes) and "run_time" not in ds.dims
+        for key in where:
+            if key not in ds.dims:
+                ds = ds.set_xindex(key)
+        picked = ds[name].sel(where)
+        assert picked.dims == ((left,) if left else ())
+        if command == "sensitivity":  # one run varies mu (factor 0.5)
+            assert float(picked.factor) == 0.5
+        assert all(ds[label].dtype.kind in "UOf" for label in where)
+
+
+def test_interventions_file_has_counts_and_words(outputs):
+    _, folders = outputs
+    table = pd.read_csv(folders["interventions"] / "interventions_compared.csv")
+    with xr.open_dataset(folders["interventions"] / "interventions_compared.nc") as ds:
+        assert list(ds.alternative.values) == ["base", "later"]
+        assert ds.tampings.dtype.kind == "i" and ds.tampings.attrs["units"] == "1"
+        np.testing.assert_array_equal(ds.tampings.values, table["tampings"])  # the same counts
+        assert ds.tamped_m_per_100_mgt.attrs["units"] == "m/(100 Mt)"
+        assert ds.tamped_m_per_100_mgt.attrs["long_name"] == "length of track tamped per 100 MGT"
+
+
+def test_long_names_are_words(outputs):
+    """No long_name is made of a name's abbreviations (``dyn load max``)."""
+    _, folders = outputs
+    abbreviations = {"dyn", "sd", "acc", "rms", "mgt", "max", "min"}
+    for command, name in NETCDF.items():
+        with xr.open_dataset(folders[command] / name) as ds:
+            for var, v in ds.variables.items():
+                tokens = set(v.attrs["long_name"].replace(",", " ").split())
+                assert not tokens & abbreviations, (command, var, v.attrs["long_name"])
 
 
 def test_run_file_reads_back_as_the_command_had_it(outputs):
@@ -176,8 +274,9 @@ def test_summary_json_describes_the_run(outputs, command):
         assert headline["runs"] == 2 and headline["failed_runs"] == 0
 
 
-def test_identical_runs_write_identical_netcdf_files(outputs):
+def test_identical_runs_write_identical_netcdf_files(outputs, monkeypatch):
     base, folders = outputs
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", EPOCH)  # the date of the first runs
     first = {name: (folders[c] / name).read_bytes() for c, name in NETCDF.items()}
     commands = {
         "run": ["run", str(base / "run.toml")],

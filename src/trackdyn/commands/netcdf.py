@@ -1,34 +1,38 @@
-"""netCDF files: CF-1.8, with the run's provenance, the same bytes for the same run.
+"""netCDF files: CF-1.8, with the run's provenance, opened labelled by plain xarray.
 
 Every command writes its Datasets through `write_netcdf`, which makes the file follow the
 CF conventions 1.8 (checked by the IOOS compliance checker in the tests) without changing
-the Dataset the command goes on to plot:
+the Dataset the command goes on to plot, so that ``xr.open_dataset`` gives it back
+labelled (``ds.wheel_load.sel(contact="FL")``):
 
-- global attributes ``Conventions``, ``title``, ``history`` (the command line, no date),
-  ``trackdyn_version``, ``source``, and from the output folder's
-  `trackdyn.commands.staging.Record` the inputs (``input_<name>`` path and
-  ``input_<name>_sha256``), the options (``option_<name>``) and the vehicle parameters
-  (``vehicle_<name>`` [SI]);
+- global attributes ``Conventions``, ``title``, ``history`` (the date and the command
+  line), ``date_created``, ``source``, the versions of trackdyn, Python and the packages
+  that shape results (``<name>_version``, `trackdyn.provenance.versions`), and from the
+  output folder's `trackdyn.commands.staging.Record` every input file (``input_<name>``
+  path and ``input_<name>_sha256``), the options (``option_<name>``) and the vehicle
+  parameters (``vehicle_<name>`` [SI]); lists and tables as JSON text, an attribute that
+  is None left out (`_attribute`);
 - every dimension has an index coordinate: a dimension labelled by names (``contact``,
-  ``rail``, ``dof``, ...) is written as an integer index with the names in the label
-  variable ``<dim>_name`` (CF 6.1: a coordinate variable is numeric); a dimension without a
-  coordinate gets as index the one strictly increasing coordinate along it (``sleeper``:
-  the positions of ``sleeper_distance``, so that ``ds.settlement.plot()`` draws against
-  distance), else an integer index (``segment``, ``step``);
-- no ``_FillValue`` on coordinates; 64-bit integers as 32-bit; every variable has a
-  ``long_name`` (taken from its name where the Dataset gives none) and, where the name ends
-  in a unit (``dyn_load_sd_kN``, ``tamped_m_per_100_mgt``), its ``units``, read whole from
-  the name by the unit registry (`trackdyn.units.name_unit`); every ``units`` is parsed by
-  the registry and written in UDUNITS spelling (`trackdyn.units.udunits`: ``MGT``, million
-  gross tonnes, as ``Mt``), except a cost's: a variable whose ``currency`` attribute
-  names one (`trackdyn.units.currency`) has it as its ``units`` (UDUNITS has no currency);
-- the time axis of a run is written as ``run_time``: CF reads a variable named ``time`` as
-  calendar time, which needs a reference date that a simulation has not;
+  ``rail``, ``dof``, ...) keeps its names, written as CF 6.1 labels (character arrays,
+  which xarray reads back as strings); a dimension without a coordinate gets as index the
+  one strictly increasing coordinate along it (``sleeper``: the positions of
+  ``sleeper_distance``, so that ``ds.settlement.plot()`` draws against distance), else an
+  integer index (``segment``, ``step``);
+- no ``_FillValue`` on coordinates; 64-bit integers as 32-bit; counts held as floats
+  (`COUNTS`) as integers of unit ``1``; every variable has a ``long_name`` (in words from
+  `trackdyn.commands.names` where the Dataset gives none) and, where the name ends in a
+  unit (``dyn_load_sd_kN``, ``tamped_m_per_100_mgt``), its ``units``, read whole from the
+  name by the unit registry (`trackdyn.units.name_unit`); every ``units`` is parsed by the
+  registry and written in UDUNITS spelling (`trackdyn.units.udunits`: ``MGT``, million
+  gross tonnes, as ``Mt``), except a cost's: a variable whose ``currency`` attribute names
+  one (`trackdyn.units.currency`) has it as its ``units`` (UDUNITS has no currency);
+- a run's time axis is ``time`` in seconds from its start (no reference date: CF 1.8, 4.4,
+  tells calendar time by units ``<unit> since <date>``);
 - the attributes that say how long parts of the computation took (`WALL_CLOCK`) are left
-  out of the file, so that two identical runs write identical files; the command's summary
-  (``summary.json``) keeps them.
+  out of the file; with ``SOURCE_DATE_EPOCH`` set (the date written) two identical runs
+  write identical files; the command's summary (``summary.json``) keeps the timings.
 
-`read_netcdf` gives back the Dataset as the command had it (names as coordinates again).
+`read_netcdf` reads a file into memory.
 
 References
 ----------
@@ -38,15 +42,19 @@ Eaton, B. et al. (2018), NetCDF Climate and Forecast (CF) Metadata Conventions, 
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 
-from trackdyn.commands.staging import record_of
+from trackdyn.commands.names import words
+from trackdyn.commands.staging import as_json, record_of
+from trackdyn.provenance import utc_now, versions
 from trackdyn.units import currency, name_unit, udunits
 
 CONVENTIONS = "CF-1.8"
-RENAMED = {"time": "run_time"}
-"""Dimensions written under another name (see the module docstring)."""
-LABEL_SUFFIX = "_name"
+COUNTS = ("tampings", "renewals", "possessions", "interventions")
+"""Variables that count events: written as integers of unit ``1`` where the Dataset holds
+them as floats (a table's column)."""
 WALL_CLOCK = ("time_vehicle_runs_s", "time_beam_solves_s", "time_bookkeeping_s")
 """Attributes of a deterioration result that say how long its parts took [s]."""
 
@@ -57,12 +65,18 @@ def timings(ds) -> dict[str, float]:
 
 
 def _attribute(value):
-    """A value netCDF stores: numbers and strings as they are, anything else as text."""
+    """A value netCDF stores (None: none, the attribute is left out): numbers and text as
+    they are, true and false as ``"true"`` and ``"false"``, lists and tables as JSON text."""
     if isinstance(value, bool | np.bool_):
         return str(bool(value)).lower()
-    if isinstance(value, int | float | str | np.integer | np.floating):
+    if isinstance(value, int | float | str | np.integer | np.floating) or value is None:
         return value
-    return "none" if value is None else str(value)
+    return json.dumps(as_json(value), allow_nan=False)
+
+
+def _attributes(attrs: dict) -> dict:
+    """``attrs`` as netCDF stores them (`_attribute`), those that are None left out."""
+    return {k: _attribute(v) for k, v in attrs.items() if v is not None}
 
 
 def _describe(var, name: str) -> None:
@@ -78,7 +92,7 @@ def _describe(var, name: str) -> None:
     if "units" in attrs and code is None:
         attrs["units"] = udunits(str(attrs["units"]))
     if "long_name" not in attrs:
-        attrs["long_name"] = stem.replace("_", " ")
+        attrs["long_name"] = words(name if code is None else stem)
     positive = attrs.pop("positive", None)  # CF: an attribute of vertical coordinates only
     if positive:
         attrs["long_name"] += f", {positive} positive"
@@ -93,7 +107,7 @@ def _index(ds, dim: str):
     ]  # fmt: skip
     if len(along) == 1:
         c = along[0]
-        return (dim, c.values, {"long_name": str(c.name).replace("_", " "), **c.attrs})
+        return (dim, c.values, {"long_name": words(str(c.name)), **c.attrs})
     index = np.arange(ds.sizes[dim], dtype=np.int32)
     return (dim, index, {"long_name": f"{dim} index (0: first)"})
 
@@ -109,25 +123,36 @@ def to_cf(ds, record=None):
         The run's provenance, for the global attributes.
     """
     out = ds.copy()
-    out.attrs = {k: v for k, v in ds.attrs.items() if k not in WALL_CLOCK}
+    out.attrs = _attributes({k: v for k, v in ds.attrs.items() if k not in WALL_CLOCK})
     for dim in list(out.dims):
         if dim in out.coords and out[dim].dtype.kind in "UO":
-            names = out[dim].variable
-            out = out.drop_vars(dim).assign_coords({f"{dim}{LABEL_SUFFIX}": names})
-            out[f"{dim}{LABEL_SUFFIX}"].attrs.setdefault("long_name", f"{dim} name")
+            out[dim].attrs.setdefault("long_name", f"{dim} name")
         if dim not in out.indexes:
             out = out.assign_coords({dim: _index(out, dim)})
-    out = out.rename({k: v for k, v in RENAMED.items() if k in out.dims})
     for name, var in out.variables.items():
         if var.dtype.kind in "iu" and var.dtype.itemsize > 4:
             if var.size and np.abs(var.values).max() >= 2**31:
                 raise ValueError(f"{name}: integers beyond 32 bits")
             out[name] = var.astype(np.int32)
+        if str(name) in COUNTS and var.dtype.kind == "f" and _whole(var.values):
+            out[name] = var.astype(np.int32)
+        if str(name) in COUNTS:
+            out[name].attrs.setdefault("units", "1")
         _describe(out[name].variable, str(name))
-    if "run_time" in out.variables:
-        out["run_time"].attrs["long_name"] = "time from the start of the run"
+    if "time" in out.variables:
+        out["time"].attrs["long_name"] = "time from the start of the run"
     out.attrs.update(global_attributes(out.attrs.get("title"), record))
     return out
+
+
+def _whole(values) -> bool:
+    """Every value a whole number that 32 bits hold (a count stored as float)."""
+    return bool(np.all(np.isfinite(values) & (values == np.round(values))))
+
+
+def labels(ds) -> list[str]:
+    """The coordinates of ``ds`` that label a dimension with names (``contact``)."""
+    return [str(d) for d in ds.dims if d in ds.coords and ds[d].dtype.kind in "UO"]
 
 
 def global_attributes(title: str | None, record=None) -> dict:
@@ -142,12 +167,14 @@ def global_attributes(title: str | None, record=None) -> dict:
     """
     from trackdyn import __version__
 
+    created = record.created if record else utc_now()
     attrs = {
         "Conventions": CONVENTIONS,
         "title": title or (record.title if record else "trackdyn result"),
-        "history": record.command_line if record else f"trackdyn {__version__}",
+        "history": f"{created} {record.command_line if record else 'trackdyn'}",
+        "date_created": created,
         "source": f"trackdyn {__version__}",
-        "trackdyn_version": __version__,
+        **{f"{name}_version": v for name, v in versions().items()},
     }
     if record is not None:
         for name, (path, digest) in record.input_digests().items():
@@ -155,7 +182,7 @@ def global_attributes(title: str | None, record=None) -> dict:
             attrs[f"input_{name}_sha256"] = digest
         attrs.update({f"option_{k}": v for k, v in record.options.items()})
         attrs.update({f"vehicle_{k}": v for k, v in record.vehicle.items()})
-    return {k: _attribute(v) for k, v in attrs.items()}
+    return _attributes(attrs)
 
 
 def write_netcdf(ds, path) -> None:
@@ -176,12 +203,15 @@ def write_netcdf(ds, path) -> None:
     out = to_cf(ds, record)
     if record is not None:
         record.timings.update(timings(ds))
-    encoding = {name: {"_FillValue": None} for name in out.coords}
+    encoding: dict[str, dict] = {name: {"_FillValue": None} for name in out.coords}
+    for name in labels(out):  # CF 6.1 labels: character arrays, read back as strings
+        encoding[name]["dtype"] = "S1"
     out.to_netcdf(path, format="NETCDF4", encoding=encoding)
 
 
 def read_netcdf(path):
-    """A file written by `write_netcdf`, as the command's Dataset (names as coordinates).
+    """A file written by `write_netcdf`, loaded into memory (the file closed): the
+    command's Dataset, names as coordinates.
 
     Parameters
     ----------
@@ -190,11 +220,4 @@ def read_netcdf(path):
     """
     import xarray as xr
 
-    ds = xr.load_dataset(path)
-    ds = ds.rename({v: k for k, v in RENAMED.items() if v in ds.dims})
-    for dim in list(ds.dims):
-        label = f"{dim}{LABEL_SUFFIX}"
-        if label in ds.coords and ds[label].dims == (dim,):
-            names = ds[label].variable
-            ds = ds.drop_vars([dim, label]).assign_coords({dim: names})
-    return ds
+    return xr.load_dataset(path)

@@ -4,8 +4,9 @@ A command writes into a hidden staging folder inside its output folder; only whe
 file is written are they moved into place, replacing the files of the command's previous
 run there. A manifest (`MANIFEST`) names the command and its files, so a folder holding
 another command's outputs is refused unless ``overwrite`` is given. With a `Record` the
-folder also gets `SUMMARY` (``summary.json``): the trackdyn version, the command line, the
-options, the inputs with their SHA-256, the headline figures, how long the run took and the
+folder also gets `SUMMARY` (``summary.json``): the versions of trackdyn, Python and the
+packages that shape results, the date, the command line, the options, every input file with
+its SHA-256 (`trackdyn.provenance`), the headline figures, how long the run took and the
 files; and ``report.html``, all of it with the tables and figures in one page
 (`trackdyn.commands.report`); netCDF files written into the folder take their provenance
 from the same record (`trackdyn.commands.netcdf`).
@@ -26,7 +27,6 @@ previous run's files stay as they were.
 from __future__ import annotations
 
 import errno
-import hashlib
 import json
 import math
 import os
@@ -38,6 +38,8 @@ import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
+
+from trackdyn.provenance import Recording, current, role_of, sha256, shown, utc_now, versions
 
 MANIFEST = ".trackdyn.json"
 """File in an output folder naming the command that wrote it and its files."""
@@ -67,9 +69,11 @@ class Record:
     title : str
         One line saying what the outputs are.
     inputs : dict
-        Input files by role (``scenario``, ``geometry``, ...); None for the built-in example.
+        Input files by role (``scenario``, ``geometry``, ...); None: no file (the built-in
+        defaults). Every other file the command read (`trackdyn.provenance`) is added by
+        its name (`input_digests`).
     options : dict
-        The options the command ran with (flat, values numbers or text).
+        The options the command ran with (values numbers, text, lists or tables).
     vehicle : dict
         Vehicle parameters by name [SI units], where a vehicle was run.
     command_line : str
@@ -80,6 +84,8 @@ class Record:
         their units (``dyn_load_max_kN``).
     timings : dict
         How long parts of the run took [s]; kept out of the netCDF files.
+    created : str
+        When the command ran (UTC, ISO 8601; `trackdyn.provenance.utc_now`).
     """
 
     title: str
@@ -88,20 +94,27 @@ class Record:
     vehicle: dict = field(default_factory=dict)
     headline: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
-    _digests: dict = field(default_factory=dict, repr=False)
     command_line: str = ""
+    created: str = field(default_factory=utc_now)
+    _recording: Recording = field(default_factory=current, repr=False)
 
     def input_digests(self) -> dict[str, tuple[str, str]]:
-        """Path and SHA-256 of each input file given (the built-in example: its name)."""
-        for name, path in self.inputs.items():
-            if name not in self._digests:
-                digest = "" if path is None else _sha256(path)
-                self._digests[name] = ("built-in example" if path is None else str(path), digest)
-        return dict(self._digests)
+        """Every input file by role, with its path as shown (`trackdyn.provenance.shown`)
+        and SHA-256: the files of ``inputs``, then every other file the command read, in
+        the order read, named by its stem (`trackdyn.provenance.role_of`)."""
+        read = dict(self._recording.inputs)
+        found: dict[str, tuple[str, str]] = {}
+        for role, path in self.inputs.items():
+            if path is not None:
+                path = Path(path).resolve()
+                found[role] = (shown(path), read.pop(path, "") or sha256(path))
+        for path, digest in read.items():
+            found[role_of(path, found)] = (shown(path), digest)
+        return found
 
     def lines(self) -> list[str]:
         """The inputs with their SHA-256 and the timings, one line each, for a reader."""
-        found = [f"input {k}: {p} {d}".rstrip() for k, (p, d) in self.input_digests().items()]
+        found = [f"input {k}: {p} {d}" for k, (p, d) in self.input_digests().items()]
         return found + [f"time {k}: {v:.3g} s" for k, v in self.timings.items()]
 
     def summary(self, command: str, files: list[str]) -> dict:
@@ -111,6 +124,8 @@ class Record:
         digests = self.input_digests()
         return {
             "trackdyn_version": __version__,
+            "versions": versions(),
+            "created": self.created,
             "command": command,
             "command_line": self.command_line,
             "title": self.title,
@@ -123,21 +138,13 @@ class Record:
         }
 
 
-def _sha256(path) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as file:
-        for block in iter(lambda: file.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
-
-def _json(value):
+def as_json(value):
     """``value`` as JSON takes it: numpy numbers as Python's, NaN and infinity (a tonnage
     never reached) as null, anything else unknown as text."""
     if isinstance(value, dict):
-        return {str(k): _json(v) for k, v in value.items()}
+        return {str(k): as_json(v) for k, v in value.items()}
     if isinstance(value, list | tuple):
-        return [_json(v) for v in value]
+        return [as_json(v) for v in value]
     if isinstance(value, bool) or value is None or isinstance(value, str):
         return value
     if hasattr(value, "item"):  # numpy scalar
@@ -254,7 +261,7 @@ def output_folder(
             files = sorted([p.name for p in stage.iterdir()] + [SUMMARY, REPORT])
             record.timings["total"] = time.perf_counter() - started
             summary = record.summary(command, files)
-            text = json.dumps(_json(summary), indent=2, allow_nan=False)
+            text = json.dumps(as_json(summary), indent=2, allow_nan=False)
             (stage / SUMMARY).write_text(text + "\n")
             (stage / REPORT).write_text(render(summary, stage), encoding="utf-8")
         _commit(out, stage, command, previous)

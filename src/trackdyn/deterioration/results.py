@@ -248,7 +248,7 @@ def _attributes(record: LoopRecord) -> dict:
     traffic, timing, track = record.traffic, record.timing, record.track
     return {
         "settlement_law": type(record.law).__name__,
-        "settlement_parameters_SI": repr(dataclasses.asdict(record.law)),
+        "settlement_parameters_SI": dataclasses.asdict(record.law),
         "passages_per_mgt": ";".join(f"{t.passages_per_mgt:.17g}" for t in traffic),
         "traffic": "; ".join(
             f"{t.label or t.vehicle.name} at {t.speed_kmh:g} km/h, "
@@ -264,10 +264,7 @@ def _attributes(record: LoopRecord) -> dict:
         "time_bookkeeping_s": timing.total - timing.vehicle - timing.beam,
         "geometry_source": track.geometry.where,
         "supports_source": track.supports.where,
-        **{
-            f"option_{k}": "default" if v is None else str(v) if isinstance(v, tuple) else v
-            for k, v in _flat_options(record.options).items()
-        },
+        **{f"option_{k}": v for k, v in _flat_options(record.options).items()},
     }
 
 
@@ -289,7 +286,7 @@ def _flat_options(options) -> dict:
     flat.update({f"run_{k}": v for k, v in run.model_dump().items()})
     if maintenance is not None:
         flat.update({f"maintenance_{k}": v for k, v in maintenance.model_dump().items()})
-    return {k: str(v) if isinstance(v, bool) else v for k, v in flat.items()}
+    return flat
 
 
 def vehicle_shares(ds) -> pd.DataFrame:

@@ -199,7 +199,9 @@ def _statistics(ds) -> Statistics:
 
 
 def gather(results: list[Result]):
-    """One tidy Dataset of the runs: labels, statistics, wheel-load spectrum, errors.
+    """One tidy Dataset of the runs: statistics, wheel-load spectrum, errors, and what
+    each run varied (``speed_kmh``, ``parameter`` and ``factor``, ...) as coordinates
+    along ``run``.
 
     Failed runs keep their labels, NaN statistics and the failure's message in ``error``.
     """
@@ -213,7 +215,8 @@ def gather(results: list[Result]):
     ]
     table = pd.DataFrame(rows)
     nan = np.full(SPECTRUM_FREQUENCY.size, np.nan)
-    ds = xr.Dataset.from_dataframe(table.rename_axis("run"))
+    swept = list(results[0][0]) if results else []
+    ds = xr.Dataset.from_dataframe(table.rename_axis("run")).set_coords(swept)
     ds["wheel_load_psd"] = xr.DataArray(
         np.array([nan if isinstance(out, Failure) else out.psd for _, out in results]),
         dims=("run", "frequency"),
@@ -223,7 +226,7 @@ def gather(results: list[Result]):
         },
     )
     ds = ds.assign_coords(frequency=("frequency", SPECTRUM_FREQUENCY, {"units": "Hz"}))
-    for name in ds.data_vars:
+    for name in [*ds.data_vars, *swept]:
         unit = name_unit(str(name))[1]  # read whole: pad_stiffness_kN_per_mm is kN/mm
         if unit is not None:
             ds[name].attrs["units"] = unit

@@ -160,7 +160,14 @@ def vehicle_source(name, base: Path | None = None) -> str | Path:
     return str(name)
 
 
-def _resolve(name_or_path) -> Path:
+def vehicle_file(name_or_path) -> Path:
+    """The TOML file of a vehicle: a preset's shipped file, or the file given.
+
+    Parameters
+    ----------
+    name_or_path : str or Path
+        Preset name or path to a ``.toml`` file.
+    """
     path = Path(str(name_or_path))
     if path.suffix == ".toml":
         return path
@@ -186,7 +193,7 @@ def load_vehicle(name_or_path, **overrides) -> Vehicle:
     **overrides : float
         Parameter values replacing the file's [SI units].
     """
-    path = _resolve(name_or_path)
+    path = vehicle_file(name_or_path)
     data = read_toml(path)
     values, sources = {}, {}
     if "base" in data:

@@ -2,19 +2,19 @@
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
 from trackdyn.commands.staging import Record, output_folder
 from trackdyn.commands.tables import alignment_table, fitted_table, frame_table
 from trackdyn.errors import require_workers
 from trackdyn.progress import note
+from trackdyn.provenance import recorded
 
 
+@recorded
 def calibrate(calibration, out, overwrite: bool, workers, scheduler, console) -> bool:
     """Fit the law (and the rate field); write the files of
-    `trackdyn.commands.calibrate.outputs.files_of`.
+    `trackdyn.commands.calibrate.outputs.files_of`, ``summary.json`` and ``report.html``.
 
     Parameters
     ----------
@@ -50,7 +50,6 @@ def calibrate(calibration, out, overwrite: bool, workers, scheduler, console) ->
     from trackdyn.parallel import shared_cluster
 
     require_workers(workers)
-    started = time.perf_counter()
     source = example_file("calibration", "calibration.toml") if calibration is None else calibration
     spec, base = load_calibration(source)
     problem = calibration_problem(spec, base)
@@ -62,8 +61,14 @@ def calibrate(calibration, out, overwrite: bool, workers, scheduler, console) ->
     )
     field = "estimated per rail seat" if spec.fit.rate_field == "estimate" else "uniform"
     note(f"settlement-rate field: {field} (fit.rate_field)")
-    with output_folder(out, "calibrate", overwrite) as stage, shared_cluster(workers, scheduler):
+    title = f"trackdyn calibrate: {spec.settlement.law} law, {len(spec.survey)} surveys"
+    record = Record(title, {"calibration": source}, spec.model_dump(mode="json"))
+    with (
+        output_folder(out, "calibrate", overwrite, record) as stage,
+        shared_cluster(workers, scheduler),
+    ):
         result = fit(problem, workers=workers, scheduler=scheduler, log=note)
+        record.headline = headline(problem, result)
         table = write_calibration(problem, result, stage, str(source))
     note(f"the optimiser: {result.message}", 2 if result.converged else 1)
     refined = zip(spec.survey[1:], result.comparison.alignments[1:], strict=True)
@@ -74,11 +79,25 @@ def calibrate(calibration, out, overwrite: bool, workers, scheduler, console) ->
     console.print(
         frame_table(sd_errors(table), "D1 SD per segment, RMS error of the prediction [mm]")
     )
-    note(f"wrote {', '.join(files_of(result))} to {out}")
-    record = Record("trackdyn calibrate", {"calibration": calibration})
-    record.timings["total"] = time.perf_counter() - started
+    note(f"wrote {', '.join(files_of(result))}, summary.json and report.html to {out}")
     note("\n".join(record.lines()), 2)
     return result.converged
+
+
+def headline(problem, result) -> dict:
+    """The fit in ``summary.json``: its status, the RMS misfit of the D1-band change at the
+    start and fitted [mm], the model runs and the fitted parameters (the parameter file's
+    units, `trackdyn.commands.calibrate.outputs.fit_table`)."""
+    from trackdyn.commands.calibrate.outputs import fit_table, status
+
+    table = fit_table(problem, result)[["parameter", "value", "unit", "standard_error"]]
+    return {
+        "status": status(result),
+        "rms_misfit_start_mm": result.rms_start,
+        "rms_misfit_fitted_mm": result.rms_fit,
+        "model_runs": result.runs,
+        "parameters": table.to_dict(orient="records"),
+    }
 
 
 def _fit_lines(problem, result) -> list[str]:

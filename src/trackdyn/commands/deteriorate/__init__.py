@@ -15,8 +15,10 @@ from trackdyn.commands.staging import Record, output_folder
 from trackdyn.commands.tables import deterioration_table, forecast_table, frame_table
 from trackdyn.errors import require_workers
 from trackdyn.progress import note
+from trackdyn.provenance import recorded
 
 
+@recorded
 def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> None:
     """Predict the deterioration of every section; write its Datasets, tables and figures.
 

@@ -18,13 +18,20 @@ import re
 from pathlib import Path
 
 from trackdyn.commands.deteriorate.scenario import loop_options, resolve_inputs
-from trackdyn.data import EXAMPLE_ZONES, example_path, load_track
+from trackdyn.data import (
+    EXAMPLE_GEOMETRY,
+    EXAMPLE_SUPPORTS,
+    EXAMPLE_ZONES,
+    example_path,
+    load_track,
+)
 from trackdyn.deterioration.ballast import read_rate_field
 from trackdyn.deterioration.law_files import load_law
 from trackdyn.deterioration.runs import Section, SectionTask
 from trackdyn.deterioration.zones import read_zones
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import read_table
+from trackdyn.provenance import note_read
 from trackdyn.track.survey import GeometryFormat
 
 NAME = re.compile(r"^[A-Za-z0-9_.-]*[A-Za-z0-9][A-Za-z0-9_.-]*$")
@@ -127,6 +134,10 @@ def section_tasks(spec, base: Path, progress: bool = False) -> list[SectionTask]
         factor = read_rate_field(base / s.rate_field, position)
         return o.model_copy(update={"rate_factor": tuple(map(tuple, factor.tolist()))})
 
+    sections = sections_of(spec, base)
+    for sec in sections:  # read in the workers: noted here for the provenance
+        note_read(sec.geometry or example_path(EXAMPLE_GEOMETRY))
+        note_read(sec.supports or example_path(EXAMPLE_SUPPORTS))
     return [
         SectionTask(
             sec,
@@ -136,5 +147,5 @@ def section_tasks(spec, base: Path, progress: bool = False) -> list[SectionTask]
             progress,
             tuple(read_zones(sec.zones, load)) if sec.zones else (),
         )  # fmt: skip
-        for i, sec in enumerate(sections_of(spec, base))
+        for i, sec in enumerate(sections)
     ]

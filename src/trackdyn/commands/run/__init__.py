@@ -33,6 +33,7 @@ from trackdyn.commands.tables import frame_table
 from trackdyn.errors import named
 from trackdyn.options import RunOptions, Strict, TrackSpec, VehicleSpec, load_toml
 from trackdyn.progress import note, status
+from trackdyn.provenance import recorded
 
 
 class Scenario(Strict):
@@ -70,11 +71,15 @@ def scenario_record(title: str, scenario, spec, base: Path, role: str = "scenari
     role : str
         What the file is called in the record (``scenario``, ``study``).
     """
+    from trackdyn.data import EXAMPLE_GEOMETRY, EXAMPLE_SUPPORTS, example_path
+    from trackdyn.vehicle.parameters import vehicle_file
+
     geometry, supports = spec.track.paths(base)
+    if geometry is None:
+        geometry, supports = example_path(EXAMPLE_GEOMETRY), example_path(EXAMPLE_SUPPORTS)
     inputs = {role: scenario, "geometry": geometry, "supports": supports}
     source = spec.vehicle.source(base)
-    if isinstance(source, Path):
-        inputs["vehicle"] = source
+    inputs["vehicle"] = vehicle_file(source)
     options = {f"run_{k}": v for k, v in spec.run.model_dump().items()}
     given = spec.track.geometry_format().model_dump(exclude_defaults=True)
     options.update({f"track_{k}": v for k, v in given.items()})
@@ -120,6 +125,7 @@ def write_run_figures(ds, spec: Scenario, folder: Path) -> None:
         save(fig, folder / name)
 
 
+@recorded
 def run(scenario, out, overwrite: bool, console) -> None:
     """Simulate the scenario; write results.nc, summary.csv, summary.json and four figures.
 

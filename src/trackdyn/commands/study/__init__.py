@@ -22,6 +22,7 @@ from trackdyn.errors import TrackdynInputError, named
 from trackdyn.io import read_toml
 from trackdyn.options import RunOptions, load_toml
 from trackdyn.progress import note
+from trackdyn.provenance import recorded
 from trackdyn.studies.scenarios import Study
 
 STUDY_KEYS = {"kind", "matrix", "sensitivity", "speed"}
@@ -94,6 +95,7 @@ def write_study(table, ds, study, folder, sleeper_spacing=None) -> list[str]:
     return [*names, "spectra.png"]
 
 
+@recorded
 def study(study_file, out, overwrite: bool, workers, scheduler, console) -> None:
     """Run a study and write study.nc, study.csv and its figures into ``out``; an
     interventions study (`trackdyn.commands.interventions`) writes its own files.

@@ -44,6 +44,7 @@ from trackdyn.io import (
 )
 from trackdyn.limits import WHEEL_LOAD, check_within
 from trackdyn.progress import note, status
+from trackdyn.provenance import recorded
 from trackdyn.track.analysis import (
     SEGMENT_M,
     curve_picks,
@@ -315,6 +316,7 @@ def write_track_outputs(ds: xr.Dataset, picks, basin, folder, marks=()) -> None:
     save(plot_deflection_basin(basin, load=ps), folder / "deflection_basin.png")
 
 
+@recorded
 def track(
     geometry, supports, wheel_load_kN: float, delta: float, rail: str, extrapolate: bool,
     out, overwrite: bool, console,
@@ -351,7 +353,7 @@ def track(
     section = rail_section(rail)
     record = Record(
         f"trackdyn track: linearised track at Ps = {wheel_load_kN:g} kN, delta = {delta:g}",
-        {"geometry": geometry if given else None, "supports": supports if given else None},
+        {"geometry": geometry, "supports": supports},
         {"wheel_load_kN": wheel_load_kN, "delta": delta, "rail": rail, "extrapolate": extrapolate},
     )
     with output_folder(out, "track", overwrite, record) as stage:
