@@ -124,7 +124,8 @@ def test_ctrl_c_to_the_process_group_of_a_two_worker_run_ends_quietly(tmp_path):
     trials 2.8-4 s after the start ended in a traceback): exit 130 and nothing on stderr,
     nothing written (or, after the end, the whole run)."""
     (tmp_path / "d.toml").write_text(DETERIORATE)
-    args = ["deteriorate", str(tmp_path / "d.toml"), "--workers", "2"]
+    # quiet: a run that ends before the signal says nothing either ("wrote ..." otherwise)
+    args = ["-q", "deteriorate", str(tmp_path / "d.toml"), "--workers", "2"]
     t0 = time.perf_counter()
     whole = start(args, tmp_path / "whole")
     assert whole.wait(timeout=600) == 0, whole.stderr.read().decode()
