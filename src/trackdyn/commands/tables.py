@@ -33,6 +33,7 @@ SHORT_NAMES = {
     "dyn_load_max": "ΔP max",
     "dyn_load_min": "ΔP min",
     "dyn_load_sd": "ΔP SD",
+    "dyn_load_sd_mean": "ΔP SD, contact mean",
     "dominant_frequency": "f dom.",
     "secondary_max": "sec. max",
     "body_bounce_acc_rms": "bounce RMS",
