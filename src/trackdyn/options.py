@@ -75,7 +75,7 @@ class RunOptions(Strict):
         The compiled central-difference scheme, or scipy's DOP853 at tight tolerance
         (slow; to check a case), see `trackdyn.solver`.
     track : {"winkler", "discrete"}
-        The track under the wheels: the linearised pseudo-static support of the seed
+        The track under the wheels: the linearised pseudo-static support of the thesis
         (5.4), or the discretely supported track of `trackdyn.track.discrete` (rails as
         beams on pads, sleeper masses, tensionless ballast behind seating gaps; central
         solver only), which also gives the sleeper-ballast force of every sleeper.

@@ -114,7 +114,8 @@ class Objective:
     scheduler : str, optional
         Address of a running Dask scheduler.
     log : callable, optional
-        Called with a one-line message after each batch.
+        Called with a one-line message after each batch (a failed trial run with
+        ``detail=True``, `fit`).
     residual : callable, optional
         Residuals [mm] of a run (a Dataset); default `residuals` of its `compare`.
     chord : bool
@@ -166,12 +167,17 @@ class Objective:
             size = next(iter(self.cache.values())).size
             self.cache[_key(p)] = np.full(size, FAILED_RUN_MM)
             if self.log:
-                self.log(f"a run failed and counts as a misfit of {FAILED_RUN_MM:g} mm: {ds}")
+                self.log(f"a trial run failed and counts as a misfit of {FAILED_RUN_MM:g} mm "
+                         f"(the optimiser steps back from it): {ds}", detail=True)  # fmt: skip
         self.runs += len(todo)
         if self.log:
             rms = np.sqrt(np.mean(self.cache[_key(theta)] ** 2))
             values = self.problem.shown(_values(self.problem, theta))
-            self.log(f"{self.runs} runs: {values}: RMS residual {rms:.3f} mm")
+            if any(p is theta for p, _ in failed):
+                self.log(f"{self.runs} runs: {values}: the run failed (-v says why); "
+                         "the optimiser steps back")  # fmt: skip
+            else:
+                self.log(f"{self.runs} runs: {values}: RMS residual {rms:.3f} mm")
 
     def dataset(self, theta):
         """The run at ``theta`` (run again when only its residuals were kept)."""
@@ -436,7 +442,9 @@ def fit(problem: Calibration, *, workers=None, scheduler=None, log=None) -> FitR
     scheduler : str, optional
         Address of a running Dask scheduler.
     log : callable, optional
-        Called with a one-line progress message after each batch of runs.
+        Called with a one-line progress message after each batch of runs, and with
+        ``detail=True`` for a line only a verbose reader wants (a trial run that failed,
+        which the optimiser steps back from).
     """
     if problem.spec.fit.rate_field == "estimate":
         parts = _field_parts(problem)

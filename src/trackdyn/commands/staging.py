@@ -86,6 +86,9 @@ class Record:
         How long parts of the run took [s]; kept out of the netCDF files.
     created : str
         When the command ran (UTC, ISO 8601; `trackdyn.provenance.utc_now`).
+    currency : str, optional
+        The currency that ends the names of costs in ``headline`` (``life_cycle_cost_EUR``),
+        for ``report.html``'s headers.
     """
 
     title: str
@@ -96,6 +99,7 @@ class Record:
     timings: dict = field(default_factory=dict)
     command_line: str = ""
     created: str = field(default_factory=utc_now)
+    currency: str | None = None
     _recording: Recording = field(default_factory=current, repr=False)
 
     def input_digests(self) -> dict[str, tuple[str, str]]:
@@ -263,7 +267,8 @@ def output_folder(
             summary = record.summary(command, files)
             text = json.dumps(as_json(summary), indent=2, allow_nan=False)
             (stage / SUMMARY).write_text(text + "\n")
-            (stage / REPORT).write_text(render(summary, stage), encoding="utf-8")
+            page = render(summary, stage, record.currency)
+            (stage / REPORT).write_text(page, encoding="utf-8")
         _commit(out, stage, command, previous)
     except BaseException as exc:
         full = _out_of_space(exc, stage)  # before the staged files are removed

@@ -33,6 +33,7 @@ SHORT_NAMES = {
     "dyn_load_max": "ΔP max",
     "dyn_load_min": "ΔP min",
     "dyn_load_sd": "ΔP SD",
+    "dyn_load_sd_mean": "ΔP SD, contact mean",
     "dominant_frequency": "f dom.",
     "secondary_max": "sec. max",
     "body_bounce_acc_rms": "bounce RMS",
@@ -88,15 +89,17 @@ def _words(name: str) -> str:
     return SHORT_NAMES.get(name, name.replace("_", " "))
 
 
-def cell(value) -> str:
-    """A value as the tables show it: text as it is; numbers to 3 significant digits, from
-    1000 on in full without an exponent (a length of 1199 m, not 1.2e+03); NaN and None as
-    `MISSING`.
+def cell(value, digits: int = 3) -> str:
+    """A value as the tables show it: text as it is; numbers to ``digits`` significant
+    digits, from 1000 on in full without an exponent (a length of 1199 m, not 1.2e+03); NaN
+    and None as `MISSING`.
 
     Parameters
     ----------
     value : str or number
         The value.
+    digits : int
+        Significant digits of a number below 1000.
     """
     if isinstance(value, str):
         return value
@@ -107,7 +110,7 @@ def cell(value) -> str:
     if math.isnan(value):
         return MISSING
     if math.isinf(value) or abs(value) < 1000:
-        return f"{value:.3g}"
+        return f"{value:.{digits}g}"
     return f"{value:.0f}"
 
 

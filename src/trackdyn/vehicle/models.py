@@ -1,4 +1,4 @@
-"""The seed's models (2-, 4-, 7- and 11-DOF) and the full model, from one parameter set.
+"""The thesis's models (2-, 4-, 7- and 11-DOF) and the full model, from one parameter set.
 
 Coordinates (positive down): body bounce ``y1``, roll ``θ``, pitch ``α``; bogie frame
 bounce ``yF, yB`` and roll ``φF, φB``; lumped wheelset bounce ``zF, zB`` and roll
@@ -6,7 +6,7 @@ bounce ``yF, yB`` and roll ``φF, φB``; lumped wheelset bounce ``zF, zB`` and r
 11-DOF model), so the bogie frame moves with the wheelset and its mass and roll inertia
 are lumped into it. These bogie models use the bogie approximation of 5.4.3.
 
-The full model is the one the seed checked that approximation against (5.4.3: a
+The full model is the one the thesis checked that approximation against (5.4.3: a
 multibody model "in which the side frames of the bogies were modelled as separate
 bodies"): per bogie two side frames (bounce, pitch) and two wheelsets (bounce, roll), one
 contact per wheel (19 degrees of freedom, 8 contacts). See `full`.

@@ -1,4 +1,4 @@
-"""Vehicle parameter sets in the seed's symbols, SI units, read from TOML with units.
+"""Vehicle parameter sets in the thesis's symbols (Fröhling, 1997), SI units, read from TOML.
 
 References
 ----------
@@ -50,7 +50,7 @@ DERIVED: dict[str, tuple[str, str]] = {
     "mw": ("mw1", "lumped wheelset mass per bogie, 2 mw1 (5.4.3)"),
     "Iw": ("Iw1", "lumped wheelset roll inertia per bogie, 2 Iw1 (5.4.3)"),
 }
-"""Seed symbols derived from a parameter (properties of `Vehicle`): the parameter they
+"""The thesis's symbols derived from a parameter (properties of `Vehicle`): the parameter they
 come from and a description, for messages."""
 SHOWN_IN = {"alpha_w": ("deg", math.pi / 180)}
 """Unit (and its size in SI units) of a parameter in messages, where not its SI unit."""
@@ -59,7 +59,7 @@ PRESETS = files("trackdyn.vehicle").joinpath("presets")
 
 @dataclass(frozen=True)
 class Vehicle:
-    """A vehicle parameter set (seed symbols, SI units); see `PARAMETERS` for meanings.
+    """A vehicle parameter set (the thesis's symbols, SI units); see `PARAMETERS` for meanings.
 
     Build one with `load_vehicle` (preset name or TOML file) and vary it with `replace`.
     The parameters describe single wheelsets (``mw1``, ``Iw1``) and side frames (``m2 / 2``
@@ -83,7 +83,7 @@ class Vehicle:
     rho2: float
     b: float
     b_cc: float
-    l: float  # noqa: E741 - the seed's symbol
+    l: float  # noqa: E741 - the thesis's symbol
     a: float
     k_ss: float
     x_ss: float
@@ -114,7 +114,7 @@ class Vehicle:
         return 2 * self.mw1
 
     @property
-    def Iw(self) -> float:  # noqa: N802 - the seed's symbol
+    def Iw(self) -> float:  # noqa: N802 - the thesis's symbol
         """Lumped wheelset roll inertia per bogie, ``2 Iw1`` (5.4.3) [kg m^2]."""
         return 2 * self.Iw1
 

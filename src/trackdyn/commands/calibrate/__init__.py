@@ -67,7 +67,7 @@ def calibrate(calibration, out, overwrite: bool, workers, scheduler, console) ->
         output_folder(out, "calibrate", overwrite, record) as stage,
         shared_cluster(workers, scheduler),
     ):
-        result = fit(problem, workers=workers, scheduler=scheduler, log=note)
+        result = fit(problem, workers=workers, scheduler=scheduler, log=_log)
         record.headline = headline(problem, result)
         table = write_calibration(problem, result, stage, str(source))
     note(f"the optimiser: {result.message}", 2 if result.converged else 1)
@@ -82,6 +82,11 @@ def calibrate(calibration, out, overwrite: bool, workers, scheduler, console) ->
     note(f"wrote {', '.join(files_of(result))}, summary.json and report.html to {out}")
     note("\n".join(record.lines()), 2)
     return result.converged
+
+
+def _log(text: str, detail: bool = False) -> None:
+    """The fit's progress on stderr; its details (failed trial runs) with -v only."""
+    note(text, 2 if detail else 1)
 
 
 def headline(problem, result) -> dict:

@@ -400,7 +400,7 @@ def interventions(path, out, overwrite: bool, workers, scheduler, console) -> No
         title = f"trackdyn study: interventions, {len(study.alternative)} alternatives"
         record = Record(title, {"study": path, "scenario": scenario_file(study, path)},
                         {"study": study.model_dump(mode="json"),
-                         "scenario": spec.model_dump(mode="json")})  # fmt: skip
+                         "scenario": spec.model_dump(mode="json")}, currency=code)  # fmt: skip
         with output_folder(out, "study", overwrite, record) as stage:
             datasets = run_alternatives(labelled, workers=workers, scheduler=scheduler,
                                         progress=True)  # fmt: skip

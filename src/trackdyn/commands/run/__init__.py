@@ -19,6 +19,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from rich.text import Text
+
 from trackdyn.commands.geometry_notes import geometry_notes
 from trackdyn.commands.netcdf import write_netcdf
 from trackdyn.commands.plots import example_marks, save
@@ -99,6 +101,33 @@ def headline(table) -> dict:
     }
 
 
+RUN_WIDE = ("secondary_max_mm", "body_bounce_acc_rms_m_per_s2")
+"""Columns of a run's summary table that hold one value for the run, not per contact:
+printed in a line under the table (`run_wide`), kept whole in ``summary.csv``."""
+
+
+def run_wide(ds, table) -> str:
+    """The line under a run's table: the largest displacement across each secondary
+    suspension [mm] (the run's ``sec. max`` is the largest of them) and the body bounce
+    RMS [m/s²].
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The run.
+    table : pandas.DataFrame
+        Its summary table (`trackdyn.results.summary`).
+    """
+    bounce = f"body bounce RMS {table['body_bounce_acc_rms_m_per_s2'].iloc[0]:.3g} m/s²"
+    sec = ds.secondary_displacement
+    if not sec.size:
+        return bounce
+    each = abs(sec).max("time") * 1e3
+    shown = ", ".join(f"{s} {v:.3g}" for s, v in zip(sec.suspension.values, each.values,
+                                                       strict=True))  # fmt: skip
+    return f"largest displacement across each secondary suspension [mm]: {shown}; {bounce}"
+
+
 def write_run_figures(ds, spec: Scenario, folder: Path) -> None:
     """Draw a run's figures into ``folder``: wheel loads, their exceedance, secondary
     displacement and, with friction wedges, wedge friction.
@@ -160,8 +189,8 @@ def run(scenario, out, overwrite: bool, console) -> None:
         write_netcdf(ds, stage / "results.nc")
         table.to_csv(stage / "summary.csv", index=False, float_format="%.4g")
         write_run_figures(ds, spec, stage)
-    console.print(
-        frame_table(table, f"{ds.attrs['model']}: {vehicle.name}, {spec.run.speed_kmh:g} km/h")
-    )
+    title = f"{ds.attrs['model']}: {vehicle.name}, {spec.run.speed_kmh:g} km/h"
+    console.print(frame_table(table.drop(columns=list(RUN_WIDE)), title))
+    console.print(Text(run_wide(ds, table)))
     note(f"wrote results.nc, summary.csv, summary.json and 4 figures to {out}")
     note("\n".join(record.lines()), 2)

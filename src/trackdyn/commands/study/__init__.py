@@ -144,7 +144,8 @@ def study(study_file, out, overwrite: bool, workers, scheduler, console) -> None
         spacing = float(np.median(np.diff(track.supports.position)))
         write_study(table, ds, spec, stage, spacing)
     title = f"{spec.kind} study, {spec.run.model}: {len(runs)} runs"
-    console.print(frame_table(table.drop(columns="error"), title))
+    shown = table.drop(columns="error").rename(columns={"dyn_load_sd_kN": "dyn_load_sd_mean_kN"})
+    console.print(frame_table(shown, title))  # a run's SD: the mean over its contacts
     for _, row in table[table["error"] != ""].iterrows():
         labels = ", ".join(f"{c}={row[c]}" for c in runs[0].labels)
         note(f"failed ({labels}): {row['error']}", 0)

@@ -362,11 +362,7 @@ def track(
                 geometry, supports, wheel_load_kN * 1e3, delta, section, extrapolate=extrapolate
             )
         table = summary_table(ds)
-        record.headline = {
-            f"{col}_{rail}": float(value)
-            for rail, row in table.set_index("rail").iterrows()
-            for col, value in row.items()
-        }
+        record.headline = {"rails": table.to_dict(orient="records")}
         write_track_outputs(ds, picks, basin, stage, [] if given else example_marks())
     source = geometry if given else f"built-in example, {EXAMPLE_GEOMETRY}"
     console.print(frame_table(table, f"Track summary ({source})"))

@@ -88,7 +88,7 @@ def plot_track_overview(ds, ax=None, *, marks=(), threshold_sd_mm: float | None 
 
 
 def plot_load_deflection(picks, ax=None, *, static_load: float, delta: float) -> Figure:
-    """Measured curves of a few sleepers with their linearisation (as the seed's Fig. 5.3).
+    """Measured curves of a few sleepers with their linearisation (as Fröhling (1997), Fig. 5.3).
 
     Parameters
     ----------
@@ -137,7 +137,7 @@ def plot_load_deflection(picks, ax=None, *, static_load: float, delta: float) ->
 
 
 def plot_deflection_basin(basin, ax=None, *, load: float) -> Figure:
-    """Deflection basin and sleeper loads over a voided sleeper (as the seed's Fig. 5.2).
+    """Deflection basin and sleeper loads over a voided sleeper (as Fröhling (1997), Fig. 5.2).
 
     Sleepers that carry no load with the measured voids (hanging) are marked.
 
