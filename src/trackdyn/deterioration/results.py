@@ -201,8 +201,7 @@ def _void_variables(record: LoopRecord, starts, ends) -> dict:
         "void_settlement": (
             ("rail", "sleeper"),
             record.void_settlement,
-            {"units": "m", "long_name": "part of the settlement due to voids",
-             "positive": "down"},
+            {"units": "m", "long_name": "part of the settlement due to voids", "positive": "down"},
         ),
         "void_d1_share": (
             ("rail", "segment"),

@@ -10,38 +10,44 @@ load in the passage above zero: the loaded rail closes the gap) strikes the ball
 per wheel; its settlement per cycle is the law's (with its own, smaller rail-seat load)
 times the impact factor
 
-    F(g) = 1 + a min(g / g_ref, 1)^2,
+    F(g) = 1 + a (g / g_ref)^n          for g <= g_ref,
+    F(g) = 1 + a (g_max - g) / (g_max - g_ref)   for g_ref < g < g_max,   1 beyond,
 
-``a`` = ``amplification`` [-], ``g_ref`` = ``gap_ref`` [m]. Why this form: the sleeper
-meets the ballast when the rail, coming down ahead of the wheel, has closed the gap, with
-the velocity of the rail there; the rail's deflection line ahead of a wheel falls
-exponentially (``e^(-x/L_c)``), so its slope, and with it the sleeper's velocity at
-contact, grows about in proportion to the gap it closes, and the impact's energy, which
-does the extra work on the ballast, with its square. A sleeper that a passage does not
-press down (the gap larger than the loaded rail can close) does not strike: its load is
-zero, and so is its settlement whatever the factor. Voids grow through the impact when the
-gap closes (Sysyn et al. 2021, abstract); the square leaves small gaps (below about 0.1
-mm with the shipped values on 100 kN/mm track) to close as the load-driven law closes
-them, the voided sleeper shedding its load to its neighbours (about +70 % on the adjacent
-sleeper for a 1 mm void, Lundqvist & Dahlberg 2005, abstract).
+``a`` = ``amplification`` [-], ``g_ref`` = ``gap_ref`` [m], ``n`` = ``exponent`` [-],
+``g_max`` = ``max_depth`` [m]. Why this form: the sleeper meets the ballast when the rail,
+coming down ahead of the wheel, has closed the gap, with the velocity of the rail there;
+the rail's deflection line ahead of a wheel falls exponentially (``e^(-x/L_c)``), so the
+sleeper's velocity at contact grows with the gap it closes and the impact's energy, which
+does the extra work on the ballast, about with its square; a small gap is closed far
+ahead of the wheel, slowly, hence the steeper shipped ``n = 4``, which leaves voids below
+about 1 mm to close as the load-driven law closes them (with ``n = 2`` the sub-millimetre
+gaps of a settlement-rate field grew too). A sleeper that a passage does not press down
+(the gap larger than the loaded rail can close) does not strike: its load is zero, and so
+is its settlement whatever the factor. Voids grow through the impact when the gap closes
+(Sysyn et al. 2021, abstract); the voided sleeper sheds load to its neighbours (about +70
+% on the adjacent sleeper for a 1 mm void, Lundqvist & Dahlberg 2005, abstract).
 
-Bounds (why it cannot run away):
+Bounds (why it cannot run away; an earlier parameter-free attempt dug a 240 mm hole):
 
 1. the factor is capped: ``F <= 1 + a`` for any gap, looseness included (21 with the
    shipped values);
-2. the void saturates: the load of a voided sleeper falls as its gap grows (the rail beam
-   carries the wheel on its neighbours), to zero where the loaded rail no longer reaches
-   the ballast, and then it neither strikes nor settles; the void grows while
-   ``F(g) (Q_v(g) / Q_n(g))^α`` exceeds 1 (``Q_v``, ``Q_n`` the voided sleeper's and its
-   neighbours' loads, ``α`` the law's load exponent) and shrinks beyond, so it tends to a
-   depth ``g*`` where the two settle alike, below the largest gap the loaded rail closes
-   (on 100 kN/mm track under a 127.5 kN wheel, the rail beam's loads give ``Q_v / Q_n`` =
-   0.44 at 1 mm and 0.23 at 1.5 mm: ``g*`` is about 1.5 mm with the shipped ``a = 20``,
-   ``g_ref = 1.5 mm``, the depth at which an iterative vehicle-track study finds voids
-   "stable", abstract in the project's reference notes); the neighbours' extra load is at
-   most what they carry beside a sleeper with no support at all (+27 % on the rail beam);
+2. the void's growth saturates: beyond ``g_ref`` the factor falls, to 1 at ``g_max``, and
+   the voided sleeper's load falls as its gap grows (the rail beam carries the wheel on
+   its neighbours); the void grows while ``F(g) (Q_v / Q_n)^α`` exceeds 1 (``Q_v``, ``Q_n``
+   the voided sleeper's and its neighbours' loads, ``α`` the law's load exponent) and
+   shrinks beyond, so that it tends to a depth below ``g_max`` (on 100 kN/mm track under a
+   127.5 kN wheel the rail beam gives ``Q_v / Q_n`` = 0.44 at 1 mm and 0.23 at 1.5 mm, so
+   ``(1 / 0.23)^2`` = 19.6 ≈ ``1 + a`` holds a void of about ``g_ref`` = 1.5 mm, the depth
+   at which an iterative vehicle-track study finds voids "stable", abstract in the
+   project's reference notes); no gap grows past ``g_max`` by the impact (3 mm shipped);
 3. a load update within a step moves no sleeper by more than `VOID_GAIN` times
-   ``F / (dF/dg)``, so the factor held over it is within half of its value at the end.
+   ``F / |dF/dg|``, so the factor held over it is within half of its value at the end.
+
+What is not bounded by the rule: a persistent void's neighbours carry more and settle
+more, so a void spreads along the track (measured on 120 m of level track from one 1.5 mm
+void, 4-DOF model, the example's loaded wagon: 9 sleepers hanging at 10 MGT, 11 at 50
+MGT, the settlement there 21.0 mm against 8.7 mm of open track), as the load-driven law
+makes any soft spot spread.
 
 Tamping and voids. A tamping packs the ballast under the sleepers it lifts, so their
 voids close (`Ballast.tamp`), but the ballast under a sleeper that hung keeps a part,
@@ -52,9 +58,10 @@ hangs again sooner than open track (a group of hanging sleepers was not effectiv
 rectified by tamping: Le Pen et al., field monitoring at a level crossing).
 
 Closed form (`void_depth`): with the neighbours held and the loads held, a void deepens by
-``dg = F(g) de`` for the law's settlement ``de`` of the sleeper: ``g(e) = (g_ref / √a)
-tan(√a e / g_ref + arctan(√a g0 / g_ref))`` until ``g = g_ref``, then ``(1 + a)`` per unit
-``e``.
+``dg = F(g) de`` for the law's settlement ``de`` of the sleeper: below ``g_ref`` the
+settlement to deepen it is ``∫ dg / F`` (`rising_settlement`, a hypergeometric function;
+``(g_ref/√a) arctan(√a g/g_ref)`` for ``n = 2``), on the falling flank ``g_max - g``
+decays exponentially to 0, and beyond ``g_max`` the void deepens as the sleeper settles.
 
 References
 ----------
@@ -68,6 +75,8 @@ from __future__ import annotations
 
 import numpy as np
 from pydantic import ConfigDict, Field, model_validator
+from scipy.optimize import brentq
+from scipy.special import hyp2f1
 
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import read_toml
@@ -77,8 +86,14 @@ from trackdyn.units import si_value
 TABLE = "voids"
 """The table of the settlement parameter file that holds the parameters."""
 
-UNITS = {"amplification": "-", "gap_ref": "m", "exponent": "-", "max_depth": "m", "memory": "-",
-         "looseness_mgt": "MGT"}
+UNITS = {
+    "amplification": "-",
+    "gap_ref": "m",
+    "exponent": "-",
+    "max_depth": "m",
+    "memory": "-",
+    "looseness_mgt": "MGT",
+}
 """The parameters and the units they are read in."""
 
 VOID_GAIN = 0.5
@@ -150,8 +165,10 @@ def load_voids(path=None) -> VoidParameters:
         value, lo, hi = (si_value({**base, "value": entry[b]}, key, unit, where)
                          for b in ("value", "min", "max"))  # fmt: skip
         if not lo <= value <= hi:
-            raise TrackdynInputError(f"{where}: [{TABLE}] {key} = {entry['value']} is "
-                                     f"outside its min {entry['min']} and max {entry['max']}")  # fmt: skip
+            bounds = f"min {entry['min']} and max {entry['max']}"
+            raise TrackdynInputError(
+                f"{where}: [{TABLE}] {key} = {entry['value']} is outside its {bounds}"
+            )
         values[key] = value
     try:
         return VoidParameters(**values)
@@ -184,26 +201,41 @@ def impact_gap(hanging_gap, peak) -> np.ndarray:
     return np.where(np.asarray(peak) > 0, hanging_gap, 0.0)
 
 
+def rising_settlement(g0: float, g: float, p: VoidParameters) -> float:
+    """The law's settlement [m] that deepens a void from ``g0`` to ``g`` [m], both at most
+    ``g_ref``, neighbours and loads held: ``∫ dg / F(g) = g_ref [x 2F1(1, 1/n; 1 + 1/n;
+    -a x^n)]`` between ``x = g/g_ref`` of the two (Gauss's hypergeometric function)."""
+    n, a, r = p.exponent, p.amplification, p.gap_ref
+
+    def primitive(x):
+        return x * hyp2f1(1.0, 1.0 / n, 1.0 + 1.0 / n, -a * x**n)
+
+    return float(r * (primitive(g / r) - primitive(g0 / r)))
+
+
 def void_depth(g0: float, settlement, p: VoidParameters) -> np.ndarray:
     """Void depth [m] after the law's settlement ``settlement`` [m] of the voided sleeper,
     from ``g0`` [m], the neighbours and the loads held: ``dg = F(g) de`` solved in closed
-    form, piece by piece (module docstring)."""
-    e = np.asarray(settlement, dtype=float)
+    form, piece by piece (module docstring; below ``g_ref``, `rising_settlement` inverted).
+    """
+    e = np.atleast_1d(np.asarray(settlement, dtype=float))
     a, r, top = p.amplification, p.gap_ref, p.max_depth
     if a == 0:
-        return g0 + e
-    s, b = np.sqrt(a), a / (top - r)
-    # rising: g = (r/√a) tan(√a e/r + arctan(√a g0/r)) up to r
-    phase = np.arctan(s * min(g0, r) / r)
-    to_ref = r * (np.arctan(s) - phase) / s if g0 < r else 0.0
-    rising = r / s * np.tan(s * np.minimum(e, to_ref) / r + phase)
+        return np.reshape(g0 + e, np.shape(settlement))
+    b = a / (top - r)
+    low = min(g0, r)
+    to_ref = rising_settlement(low, r, p)
+    rising = np.array([r if x >= to_ref else low if x <= 0 else
+                       brentq(lambda g, x=x: rising_settlement(low, g, p) - x, low, r,
+                              xtol=1e-16, rtol=1e-13) for x in e])  # fmt: skip
     # falling: u = top - g, du/de = -(1 + b u): u = (u0 + 1/b) e^(-b e) - 1/b down to 0
     u0 = top - max(min(g0, top), r)
     to_top = np.log1p(b * u0) / b
     e2 = np.clip(e - to_ref, 0.0, to_top)
     falling = top - ((u0 + 1 / b) * np.exp(-b * e2) - 1 / b)
     beyond = max(g0, top) + np.maximum(e - to_ref - to_top, 0.0)
-    return np.where(e < to_ref, rising, np.where(e - to_ref < to_top, falling, beyond))
+    out = np.where(e < to_ref, rising, np.where(e - to_ref < to_top, falling, beyond))
+    return np.reshape(out, np.shape(settlement))
 
 
 class Voids:
