@@ -8,6 +8,8 @@ current gaps, give the rail-seat load cycles of every sleeper
 under each rail seat (`trackdyn.deterioration.accumulation`), times the sleeper's
 settlement-rate factor; the ballast level drops by it, the rail comes to rest on the new
 ballast (hanging where it cannot reach), and the next step starts from there.
+With the ``voids`` option a hanging sleeper that a passage presses onto its ballast settles
+faster (`trackdyn.deterioration.voids`); off, nothing of it runs.
 
 Mixed traffic: in a step of ``ΔM`` MGT each wheel of each vehicle applies its passages per
 MGT times ``ΔM`` cycles at every sleeper of its rail, with the load it had there at the
