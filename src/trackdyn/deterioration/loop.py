@@ -8,6 +8,8 @@ current gaps, give the rail-seat load cycles of every sleeper
 under each rail seat (`trackdyn.deterioration.accumulation`), times the sleeper's
 settlement-rate factor; the ballast level drops by it, the rail comes to rest on the new
 ballast (hanging where it cannot reach), and the next step starts from there.
+With the ``voids`` option a hanging sleeper that a passage presses onto its ballast settles
+faster (`trackdyn.deterioration.voids`); off, nothing of it runs.
 
 Mixed traffic: in a step of ``ΔM`` MGT each wheel of each vehicle applies its passages per
 MGT times ``ΔM`` cycles at every sleeper of its rail, with the load it had there at the
@@ -84,6 +86,7 @@ from trackdyn.deterioration.record import (
 )
 from trackdyn.deterioration.results import make_dataset
 from trackdyn.deterioration.starts import STARTS, surveyed_geometry, tamped_geometry
+from trackdyn.deterioration.voids import Voids
 from trackdyn.deterioration.zones import check_zones
 from trackdyn.errors import (
     Failure,
@@ -271,6 +274,8 @@ class SectionLoop:
             else Maintenance(o.maintenance, pos, seg_start, seg_end, o.threshold_sd_mm)
         )
         self.wear = self.maint.factor if self.maint is not None else (lambda dm: 1.0)
+        self.voids = None if o.voids is None else Voids(o.voids, self.shape)
+        self.by_void = np.zeros(self.shape)  # the part of the settlement due to voids [m]
         self.reference, self.fresh = track.geometry, 0.0  # tonnage of the last (re)start [MGT]
         self.by_vehicle = np.zeros((len(traffic), *self.shape))
         extra = [float(m) for m in o.snapshot_mgt if 0.0 < m < self.total]
@@ -278,7 +283,8 @@ class SectionLoop:
                                                  [self.total]]))  # fmt: skip
         self.ends = np.unique(np.concatenate([extra, [self.total]]))  # a step must end [MGT]
         self.level, self.mgt, self.geometry = np.zeros(self.shape), 0.0, track.geometry
-        self.states = [TrackState(0.0, self.level, self.geometry, self.state.hanging_gap)]
+        self.states: list[TrackState] = []
+        self.snapshot(0.0, self.level, self.state, self.geometry)
         self.steps: list[StepRecord] = []
         self.step_lins: list = []  # the step's linearisations, one per run
         self.fresh_runs: list[TrafficRun] = []  # the runs of the step's request
@@ -365,7 +371,8 @@ class SectionLoop:
                     Status.SETTLEMENT_RAN_AWAY,
                 )
             cycles, peak = self.loads_from_runs()
-            settle = _scaled(self.rate, self.acc.prepare(cycles), self.wear)
+            wear = self._wear(peak)
+            settle = _scaled(self.rate, self.acc.prepare(cycles), wear)
             if span is None:  # the accuracy limit, and at least one train
                 span = step_size(lambda dm, f=settle: shape_change(f(dm), self.mean_over),
                                  target - mgt, self.limit)  # fmt: skip
@@ -377,6 +384,8 @@ class SectionLoop:
                                            o.segment_length, span)  # fmt: skip
                 step_peak = peak
             stable = stable_settlement(peak, self.ballast.stiffness, self.sensitivity)
+            if self.voids is not None:
+                stable = np.minimum(stable, self.voids.limit(self.state.hanging_gap, peak))
             dm = step_size(settle, span - moved, stable)
             here = mgt + moved
             for m in self.snap_at[(self.snap_at > here) & (self.snap_at <= here + dm)]:
@@ -386,7 +395,12 @@ class SectionLoop:
                 self.snapshot(m, inner, at, self.ballast.geometry(self.reference, at))
                 self.timing.beam += time.perf_counter() - clock
             self.level = self.level + settle(dm)
-            step_parts += self.rate * self.wear(dm) * self.acc.advance(dm)
+            split = self.acc.advance(dm)
+            step_parts += self.rate * wear(dm) * split
+            if self.voids is not None:
+                extra = self.voids.factor(dm) - 1.0
+                self.by_void += self.rate * self.wear(dm) * extra * split.sum(axis=0)
+                self.voids.advance(dm)
             if maint is not None:
                 maint.advance(dm)
             moved, updates = moved + dm, updates + 1
@@ -394,6 +408,16 @@ class SectionLoop:
             self.state = self.ballast.state(self.level, self.state)
             self.timing.beam += time.perf_counter() - clock
         self._end_step(target, span, step_parts, step_peak, start_level, updates)
+
+    def _wear(self, peak):
+        """The settlement-rate factor against the step [MGT] of the maintenance's wear
+        and, with the ``voids`` option, of ballast under a void on the current ballast
+        under the loads ``peak`` [N] (`trackdyn.deterioration.voids`)."""
+        voids, wear = self.voids, self.wear
+        if voids is None:
+            return wear
+        voids.update(self.state.hanging_gap, peak)
+        return lambda dm: wear(dm) * voids.factor(dm)
 
     def _end_step(self, target, span, step_parts, peak, start_level, updates) -> None:
         """Record the step that `settle_step` made, and the track at its end."""
@@ -414,7 +438,8 @@ class SectionLoop:
     def snapshot(self, mgt: float, level, state, geometry) -> None:
         """Store the track at ``mgt`` [MGT]: settlement ``level`` [m], the ballast
         ``state`` and the ``geometry``."""
-        self.states.append(TrackState(mgt, level, geometry, state.hanging_gap))
+        voids = None if self.voids is None else self.voids.factor(0.0)
+        self.states.append(TrackState(mgt, level, geometry, state.hanging_gap, voids))
 
     def maintain(self) -> None:
         """Tamp the segments due at the step's end (`trackdyn.deterioration.maintenance`):
@@ -432,6 +457,8 @@ class SectionLoop:
         tamped, held = maint.tamp(mgt, due, geometry, extent, o.segment_length)
         change = [np.interp(self.position, geometry.distance, tamped.profile(r) -
                             geometry.profile(r)) for r in RAILS]  # fmt: skip
+        if self.voids is not None:
+            self.voids.tamp(held)
         self.ballast.tamp(self.level, self.state, held, np.array(change))
         self.geometry = tamped
         self.acc.restart(held, maint.o.consolidated_mgt)
@@ -446,7 +473,8 @@ class SectionLoop:
         """What the loop recorded, for `trackdyn.deterioration.results.make_dataset`."""
         return LoopRecord(self.track, self.traffic, self.law, self.o, self.states, self.steps,
                           self.snap_at, self.acc.N, self.rate, self.by_vehicle, self.kind,
-                          self.maint.done if self.maint else [], self.timing)  # fmt: skip
+                          self.maint.done if self.maint else [], self.timing,
+                          None if self.voids is None else self.by_void)  # fmt: skip
 
 
 def _start_state(track: Track, o: LoopOptions):

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from pydantic import ConfigDict, Field
 
 from trackdyn.deterioration.maintenance import MaintenanceOptions
+from trackdyn.deterioration.voids import VoidParameters
 from trackdyn.limits import MAX_TOTAL_MGT
 from trackdyn.options import RunOptions, Strict
 from trackdyn.vehicle.models import build_model
@@ -137,6 +138,11 @@ class LoopOptions(Strict):
     maintenance : MaintenanceOptions, optional
         Tamp over the horizon (`trackdyn.deterioration.maintenance`); None: no maintenance,
         the loop only reports when each segment reaches the threshold.
+    voids : VoidParameters, optional
+        Ballast under a void settles faster (`trackdyn.deterioration.voids`), with these
+        parameters (the ``[voids]`` table of the settlement parameter file, read by
+        `trackdyn.deterioration.voids.load_voids`; ``[settlement] voids = true`` in a
+        scenario); None (default): off, the loop as without the option.
     """
 
     model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
@@ -160,6 +166,7 @@ class LoopOptions(Strict):
     snapshot_mgt: tuple[float, ...] = ()
     min_step_passages: float = loop_key(100.0, gt=0, le=1e6)
     maintenance: MaintenanceOptions | None = None
+    voids: VoidParameters | None = None
 
     @property
     def max_step_settlement(self) -> float:

@@ -62,12 +62,16 @@ class TrackState:
         The unloaded space curve.
     hanging_gap : ndarray
         Gap under each sleeper with the rail at rest (rail, sleeper) [m].
+    void_factor : ndarray, optional
+        Settlement-rate factor of ballast under a void (rail, sleeper) [-], with the
+        loop's ``voids`` option (`trackdyn.deterioration.voids`).
     """
 
     mgt: float
     settlement: np.ndarray
     geometry: Geometry
     hanging_gap: np.ndarray
+    void_factor: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -147,6 +151,9 @@ class LoopRecord:
         The maintenance's tampings and renewals.
     timing : Timing
         Seconds spent, by part.
+    void_settlement : ndarray, optional
+        The part of the settlement due to voids (rail, sleeper) [m], with the loop's
+        ``voids`` option.
     """
 
     track: Track
@@ -162,3 +169,4 @@ class LoopRecord:
     kind: np.ndarray
     interventions: list = field(default_factory=list)
     timing: Timing = field(default_factory=Timing)
+    void_settlement: np.ndarray | None = None

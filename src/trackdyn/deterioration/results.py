@@ -69,7 +69,12 @@ def make_dataset(record: LoopRecord) -> xr.Dataset:
     ``intervention_mgt`` [MGT], ``intervention_segment``, ``intervention_kind`` (tamping or
     renewal), ``d1_sd_before`` and ``d1_sd_after`` (intervention, rail) [mm] and
     ``intervention_lift`` [m], the mean lift; ``interventions`` (segment), how many each
-    segment had. With maintenance, the state stored at a tonnage is the one before any
+    segment had. With the loop's ``voids`` option (`trackdyn.deterioration.voids`; the
+    void depth per sleeper over MGT is ``hanging_gap``): ``void_rate_factor`` (mgt, rail,
+    sleeper) [-], the settlement-rate factor of ballast under a void; ``void_settlement``
+    (rail, sleeper) [m], the part of the settlement due to it; ``void_d1_share`` (rail,
+    segment) [-], the voids' share of the D1-band unevenness the settlement made in each
+    segment (`void_d1_share`). With maintenance, the state stored at a tonnage is the one before any
     tamping at that tonnage. The attributes hold the law, the traffic, the seconds spent
     and the loop options in SI (`LoopOptions.in_si`, ``option_<name>``).
 
@@ -88,6 +93,7 @@ def make_dataset(record: LoopRecord) -> xr.Dataset:
         **_section_variables(record),
         **_intervention_variables(record.interventions, starts.size),
         **_step_variables(record.steps, record.track.supports.position.size),
+        **_void_variables(record, starts, ends),
     }
     coords = {
         "mgt": ("mgt", mgt, {"units": "MGT", "long_name": "accumulated traffic"}),
@@ -147,6 +153,60 @@ def _state_variables(record: LoopRecord, mgt, sd, snap_index) -> dict:
             ("mgt", "rail"),
             np.sum(gaps > HANGING_GAP, axis=-1),
             {"units": "1", "long_name": f"sleepers hanging by more than {HANGING_GAP} m"},
+        ),
+    }
+
+
+def void_d1_share(position, settlement, part, starts, ends) -> np.ndarray:
+    """The share of a settlement's D1-band unevenness (EN 13848-1, along the sleepers) in
+    each segment that a part of it makes, (rail, segment) [-].
+
+    The variance is split by covariance, as each vehicle's share (`vehicle_shares`):
+    ``Σ cov(D1(e_p), D1(e)) / Σ var(D1(e))`` over the segment's sleepers; NaN where the
+    settlement is even. With tamping, it is the share of all the settlement so far, not of
+    the geometry since the last tamping.
+
+    Parameters
+    ----------
+    position : ndarray
+        Sleeper positions [m].
+    settlement, part : ndarray
+        The settlement and its part, (rail, sleeper) [m].
+    starts, ends : ndarray
+        Segment bounds [m].
+    """
+    whole = np.array([longitudinal_level(position, e, "D1") for e in settlement])
+    own = np.array([longitudinal_level(position, e, "D1") for e in part])
+    out = np.full((whole.shape[0], len(starts)), np.nan)
+    for j, (a, b) in enumerate(zip(starts, ends, strict=True)):
+        inside = (position >= a) & (position <= b)
+        variance = np.sum(whole[:, inside] ** 2, axis=-1)
+        cov = np.sum(own[:, inside] * whole[:, inside], axis=-1)
+        out[:, j] = np.divide(cov, variance, out=out[:, j], where=variance > 0)
+    return out
+
+
+def _void_variables(record: LoopRecord, starts, ends) -> dict:
+    """The variables of ballast under a void, with the loop's ``voids`` option."""
+    if record.void_settlement is None:
+        return {}
+    pos = record.track.supports.position
+    total = record.states[-1].settlement
+    return {
+        "void_rate_factor": (
+            ("mgt", "rail", "sleeper"),
+            np.array([s.void_factor for s in record.states]),
+            {"units": "1", "long_name": "settlement-rate factor of ballast under a void"},
+        ),
+        "void_settlement": (
+            ("rail", "sleeper"),
+            record.void_settlement,
+            {"units": "m", "long_name": "part of the settlement due to voids", "positive": "down"},
+        ),
+        "void_d1_share": (
+            ("rail", "segment"),
+            void_d1_share(pos, total, record.void_settlement, starts, ends),
+            {"units": "1", "long_name": "share of the settlement's D1 unevenness due to voids"},
         ),
     }
 
@@ -282,8 +342,10 @@ def _flat_options(options) -> dict:
     """Loop options in SI (`LoopOptions.in_si`), the run and maintenance options spelled
     out as ``run_<name>`` and ``maintenance_<name>``."""
     flat = options.in_si()
-    run, maintenance = flat.pop("run"), flat.pop("maintenance")
+    run, maintenance, voids = flat.pop("run"), flat.pop("maintenance"), flat.pop("voids")
     flat.update({f"run_{k}": v for k, v in run.model_dump().items()})
+    if voids is not None:
+        flat.update({f"voids_{k}": v for k, v in voids.model_dump().items()})
     if maintenance is not None:
         flat.update({f"maintenance_{k}": v for k, v in maintenance.model_dump().items()})
     return flat

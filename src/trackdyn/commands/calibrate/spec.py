@@ -168,4 +168,6 @@ def calibration_problem(spec: CalibrationScenario, base: Path) -> Calibration:
         Folder that relative paths in it start from.
     """
     traffic, law = resolve_inputs(spec, base)
-    return prepare(spec, base, traffic, law, loop_options(spec, (spec.settlement.seed, 0)))
+    return prepare(
+        spec, base, traffic, law, loop_options(spec, (spec.settlement.seed, 0), base=base)
+    )

@@ -25,6 +25,8 @@ rate_cov = 0.3                  # lognormal settlement-rate factor per sleeper (
 rate_correlation_length_m = 3   # its correlation length along the track (illustrative)
 seed = 0
 # rate_field = "rate_field.csv" # or the factor per rail seat (trackdyn calibrate's file)
+# voids = true                  # ballast under a void settles faster; parameters: the
+                                # file's [voids] table (trackdyn.deterioration.voids)
 
 [loop]                          # trackdyn.deterioration.LoopOptions, its [loop] keys
 total_mgt = 50
@@ -136,7 +138,9 @@ class SettlementSpec(Strict):
     """``[settlement]``: ``law`` name, parameter ``file``, ``overrides`` [SI], the lognormal
     settlement-rate field's ``rate_cov`` [-], ``rate_correlation_length_m`` [m] (defaults
     those of `LoopOptions`) and ``seed``, or ``rate_field``, a CSV file of the factor per
-    rail seat (`trackdyn.deterioration.ballast.read_rate_field`)."""
+    rail seat (`trackdyn.deterioration.ballast.read_rate_field`); ``voids``, ballast under a
+    void settles faster (`trackdyn.deterioration.voids`, the parameter file's ``[voids]``
+    table)."""
 
     law: str = "power"
     file: Path | None = None
@@ -145,6 +149,7 @@ class SettlementSpec(Strict):
     rate_correlation_length_m: PositiveFloat = _default("rate_correlation_length_m")
     seed: int = Field(0, ge=0)
     rate_field: Path | None = None
+    voids: bool = False
 
     @model_validator(mode="after")
     def _one_field(self):
@@ -422,7 +427,7 @@ def load_deterioration(path=None) -> tuple[DeteriorationScenario, Path]:
     return load_toml(DeteriorationScenario, path)
 
 
-def loop_options(spec: DeteriorationScenario, seed, example: bool = False):
+def loop_options(spec: DeteriorationScenario, seed, example: bool = False, base=None):
     """`LoopOptions` of a scenario: its ``[loop]`` table and the loop options of its other
     tables, by name (the same names and units).
 
@@ -434,8 +439,13 @@ def loop_options(spec: DeteriorationScenario, seed, example: bool = False):
         Rate-field seed of one section.
     example : bool
         The section is the built-in example (starts tamped unless ``[track] start`` says).
+    base : Path, optional
+        Folder that the parameter file's path starts from (``[settlement] voids``).
     """
+    from trackdyn.deterioration.voids import load_voids
+
     s = spec.settlement
+    file = None if s.file is None else (base or Path(".")) / s.file
     return spec.loop.model_copy(update={
         "total_mgt": spec.horizon_mgt,
         "rate_cov": s.rate_cov,
@@ -445,6 +455,7 @@ def loop_options(spec: DeteriorationScenario, seed, example: bool = False):
         "rail": spec.track.rail,
         "start": spec.track.start or ("tamped" if example else "as measured"),
         "maintenance": None if spec.maintenance is None else spec.maintenance.options(),
+        "voids": load_voids(file) if s.voids else None,
     })  # fmt: skip
 
 

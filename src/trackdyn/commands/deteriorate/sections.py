@@ -127,7 +127,7 @@ def section_tasks(spec, base: Path, progress: bool = False) -> list[SectionTask]
         return load_law(s.law, file or own, kind, **s.overrides)
 
     def options(i, sec):
-        o = loop_options(spec, (spec.settlement.seed, i), sec.geometry is None)
+        o = loop_options(spec, (spec.settlement.seed, i), sec.geometry is None, base)
         if s.rate_field is None:
             return o
         position = load_track(sec.geometry, sec.supports).supports.position
