@@ -26,10 +26,10 @@ HERE = Path(__file__).parents[2] / "src" / "trackdyn" / "examples" / "calibratio
 def main() -> None:
     spot = SoftSpot(centre=100.0, length=8.0, factor=0.45, gap=1.5e-3)
     track = synthetic_track(200.0, spectrum="fra5", seed=3, features=(spot,))
-    traffic = [Traffic(load_vehicle(v), 60 / 3.6, 8065.0, v) for v in ("loaded", "empty")]
+    traffic = [Traffic(load_vehicle(v), 60.0, 8065.0, v) for v in ("loaded", "empty")]
     law = load_law("power", K_s=0.8e-3, load_exponent=2.5)
-    options = LoopOptions(run=RunOptions(model="7dof"), rate_cov=0.0, segment_length=100.0,
-                          max_step_settlement=2e-3, start="as surveyed")  # fmt: skip
+    options = LoopOptions(run=RunOptions(model="7dof"), rate_cov=0.0, segment_length_m=100.0,
+                          max_step_settlement_mm=2.0, start="as surveyed")  # fmt: skip
     surveys = synthetic_surveys(track, traffic, law, options, (0.0, 2.0, 5.0), seed=7)
     write_supports(track.supports, HERE / "supports.csv")
     for k, survey in enumerate(surveys):
