@@ -31,9 +31,6 @@ from trackdyn.io import read_geometry
 from trackdyn.track.quality import WAVEBANDS, longitudinal_level
 from trackdyn.track.track import RAILS, Geometry
 
-GAP_FACTOR = 2.0
-"""A distance step over this many times the survey's median spacing is a gap [-]."""
-
 REFINE = 1.0
 """Half-width of the search of the alignment to a predicted profile [m]."""
 
@@ -43,24 +40,15 @@ of all surveys together as a fraction of the first [-]."""
 
 
 def read_survey(path) -> Geometry:
-    """Read a survey (geometry CSV, ``distance_m,left_mm,right_mm``) and refuse gaps.
+    """Read a survey (geometry CSV, ``distance_m,left_mm,right_mm``): `read_geometry`,
+    which bridges gaps up to its ``max_gap_m`` and refuses longer ones naming the lines.
 
     Parameters
     ----------
     path : path
         The CSV file.
     """
-    geometry = read_geometry(path)
-    step = np.diff(geometry.distance)
-    spacing = float(np.median(step))
-    gaps = np.flatnonzero(step > GAP_FACTOR * spacing)
-    if gaps.size:
-        i = gaps[0]
-        raise TrackdynInputError(
-            f"{path}: line {i + 3}: gap of {step[i]:g} m after {geometry.distance[i]:g} m "
-            f"(spacing {spacing:g} m elsewhere); a survey must be continuous"
-        )
-    return geometry
+    return read_geometry(path)
 
 
 def d1_levels(geometry: Geometry, spacing: float) -> tuple[float, np.ndarray]:
