@@ -5,8 +5,9 @@ loaded wagon at 60 km/h over the built-in example (its whole 1 km, or 100 m with
 ``--smoke``), end to end through `trackdyn.simulation.run_batch` (best of 3, compiled code
 cached by a first run); and where the time goes: building the discrete track (rest state),
 the static start, the compiled loop, and the rest (geometry sampling, storage). With
-``--deteriorate``, the built-in 50 MGT deterioration example (2 MGT with ``--smoke``) with
-``track = "discrete"``: wall time and its split, as the loop records it.
+``--deteriorate``, the built-in 50 MGT deterioration example (``--mgt`` to change it, 2 MGT
+with ``--smoke``) on the discrete and on the Winkler track, with ``--voids`` the ballast
+under a void too: steps, wall time and its split as the loop records it.
 """
 
 from __future__ import annotations
@@ -74,38 +75,48 @@ def main(smoke: bool) -> None:
           f"{best - loop - parts['_rest'] - parts['start']:.3f} s")  # fmt: skip
 
 
-def deteriorate(smoke: bool) -> None:
+def deteriorate(smoke: bool, voids: bool, mgt: float | None) -> None:
+    """The built-in deterioration example on the discrete track and on the Winkler track,
+    optionally with ballast under a void (`trackdyn.deterioration.voids`): steps and wall
+    time of each, and the hanging sleepers at the end."""
     spec, base = load_deterioration(None)
-    loop = {"total_mgt": 2.0} if smoke else {}
-    spec = spec.model_copy(
-        update={
-            "run": spec.run.model_copy(update={"track": "discrete"}),
-            "loop": spec.loop.model_copy(update=loop),
-        }
-    )
-    task = section_tasks(spec, base)[0]
-    t = time.perf_counter()
-    result = run_section(task)
-    wall = time.perf_counter() - t
-    if isinstance(result, Failure):
-        raise SystemExit(result.message)
-    a = result.attrs
-    parts = ", ".join(
-        f"{label} {a[key]:.1f} s"
-        for key, label in (("time_vehicle_runs_s", "vehicle runs"),
-                           ("time_beam_solves_s", "rail beam"),
-                           ("time_bookkeeping_s", "bookkeeping"))
-    )  # fmt: skip
-    print(f"example on the discrete track, {spec.loop.total_mgt:g} MGT, {a['steps']} steps: "
-          f"{wall:.1f} s ({parts})")  # fmt: skip
+    total = 2.0 if smoke else mgt or spec.loop.total_mgt
+    for track in ("winkler", "discrete"):
+        case = spec.model_copy(
+            update={
+                "run": spec.run.model_copy(update={"track": track}),
+                "loop": spec.loop.model_copy(update={"total_mgt": total}),
+                "settlement": spec.settlement.model_copy(update={"voids": voids}),
+            }
+        )
+        task = section_tasks(case, base)[0]
+        t = time.perf_counter()
+        result = run_section(task)
+        wall = time.perf_counter() - t
+        if isinstance(result, Failure):
+            raise SystemExit(result.message)
+        a = result.attrs
+        parts = ", ".join(
+            f"{label} {a[key]:.1f} s"
+            for key, label in (("time_vehicle_runs_s", "vehicle runs"),
+                               ("time_beam_solves_s", "rail beam"),
+                               ("time_bookkeeping_s", "bookkeeping"))
+        )  # fmt: skip
+        hanging = int(result.hanging_sleepers.isel(mgt=-1).sum())
+        print(f"example on the {track} track{' with voids' if voids else ''}, {total:g} MGT, "
+              f"{a['steps']} steps: {wall:.1f} s ({parts}); "
+              f"{hanging} sleeper rail seats hanging at the end")  # fmt: skip
 
 
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--smoke", action="store_true", help="a short run, for CI")
-    parser.add_argument("--deteriorate", action="store_true", help="the 50 MGT example")
+    parser.add_argument("--deteriorate", action="store_true",
+                        help="the deterioration example, discrete against Winkler track")
+    parser.add_argument("--voids", action="store_true", help="with ballast under a void")
+    parser.add_argument("--mgt", type=float, help="tonnage of --deteriorate [MGT]")
     args = parser.parse_args()
     if args.deteriorate:
-        deteriorate(args.smoke)
+        deteriorate(args.smoke, args.voids, args.mgt)
     else:
         main(args.smoke)
