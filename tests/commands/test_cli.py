@@ -233,7 +233,7 @@ def test_short_help_option_and_bare_command():
 def test_deterioration_table_writes_never_for_no_trigger():
     row = dict(section="a", mgt=50.0, steps=3, settlement_min_mm=1.0, settlement_mean_mm=2.0,
                settlement_max_mm=3.0, d1_sd_max_initial_mm=1.0, d1_sd_max_final_mm=1.2,
-               first_trigger_mgt=np.inf)  # fmt: skip
+               first_trigger_mgt=np.inf, hanging_rail_seats_final=0)  # fmt: skip
     console = Console(width=120, record=True)
     console.print(deterioration_table(pd.DataFrame([row]), "x"))
     text = console.export_text()

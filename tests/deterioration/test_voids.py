@@ -4,6 +4,7 @@ with it (4-DOF model, short level tracks). Figures measured on this code are lab
 import numpy as np
 import pytest
 
+from trackdyn.commands.deteriorate.outputs import summary
 from trackdyn.deterioration import LoopOptions, Traffic, load_law, predict
 from trackdyn.deterioration.maintenance import MaintenanceOptions
 from trackdyn.deterioration.voids import impact_factor, load_voids, void_depth
@@ -116,6 +117,13 @@ def test_single_void_persists_through_50_mgt_bounded_by_the_maximum_depth():
     assert float(ds.void_rate_factor.max()) <= 1.0 + VOIDS.amplification
     off = predict(trk, [LOADED], LAW, options(total_mgt=10.0, voids=None))
     assert float(off.hanging_gap.isel(mgt=-1, rail=0, sleeper=v)) < 0.1e-3
+    # the command's summary (and so the report's headline) counts the hanging rail seats
+    # (the void and its neighbours: measured 11 sleepers, each under both rails) and
+    # states the voids' share only with the option
+    (row,) = summary([ds.assign_attrs(section="a")]).to_dict(orient="records")
+    (row_off,) = summary([off.assign_attrs(section="a")]).to_dict(orient="records")
+    assert row["hanging_rail_seats_final"] >= 2 * 9 and row_off["hanging_rail_seats_final"] == 0
+    assert 0.0 < row["void_d1_share_max"] <= 1.0 and "void_d1_share_max" not in row_off
 
 
 def test_a_voided_segment_deteriorates_at_least_one_and_a_half_times_as_fast():

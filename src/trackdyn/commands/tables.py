@@ -209,13 +209,13 @@ def deterioration_table(table, title: str) -> Table:
     ----------
     table : pandas.DataFrame
         `trackdyn.commands.deteriorate.outputs.summary`: settlement [mm], D1 SD [mm], tonnages
-        [MGT].
+        [MGT], hanging sleeper rail seats at the end.
     title : str
         Title above the table.
     """
     show = Table(title=title)
     for col in ("section", "MGT", "steps", "settlement min/mean/max [mm]", "D1 SD max [mm]",
-                "trigger [MGT]"):  # fmt: skip
+                "trigger [MGT]", "hanging rail seats"):  # fmt: skip
         show.add_column(Text(col))
     for r in table.itertuples(index=False):
         show.add_row(
@@ -225,6 +225,7 @@ def deterioration_table(table, title: str) -> Table:
             f"{r.settlement_min_mm:.2f} / {r.settlement_mean_mm:.2f} / {r.settlement_max_mm:.2f}",
             f"{r.d1_sd_max_initial_mm:.2f} -> {r.d1_sd_max_final_mm:.2f}",
             "never" if math.isinf(r.first_trigger_mgt) else f"{r.first_trigger_mgt:.3g}",
+            str(r.hanging_rail_seats_final),
         )
     return show
 

@@ -25,7 +25,10 @@ def _shares(ds) -> pd.DataFrame:
 
 
 def summary(datasets) -> pd.DataFrame:
-    """One row per section: steps, final settlement and D1 SD, first maintenance trigger.
+    """One row per section: steps, final settlement and D1 SD, first maintenance trigger,
+    the sleeper rail seats hanging at the end (by more than
+    `trackdyn.deterioration.results.HANGING_GAP`) and, with the loop's ``voids`` option,
+    the largest share of a segment's D1-band unevenness due to ballast under voids.
 
     Parameters
     ----------
@@ -48,8 +51,11 @@ def summary(datasets) -> pd.DataFrame:
                 "d1_sd_max_final_mm": float(ds.d1_sd.isel(mgt=-1).max()),
                 "first_trigger_mgt": float(np.min(trigger)) if trigger.size else np.inf,
                 "interventions": int(ds.sizes["intervention"]),
+                "hanging_rail_seats_final": int(ds.hanging_sleepers.isel(mgt=-1).sum()),
             }
         )
+        if "void_d1_share" in ds:
+            rows[-1]["void_d1_share_max"] = float(ds.void_d1_share.max())
     return pd.DataFrame(rows)
 
 
