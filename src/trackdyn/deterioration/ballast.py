@@ -77,6 +77,12 @@ RATE_FIELD_COLUMNS = ("distance_m", "rail", "factor")
 """Columns a rate-field file needs (`read_rate_field`); others (``standard_error``) are
 ignored."""
 
+PACKED_GAP = 1e-6
+"""Largest gap a tamped sleeper may keep under it [m] (`Ballast.tamp`)."""
+
+PACKING_PASSES = 8
+"""Passes of packing at most (`Ballast.tamp`): each packs the sleepers still hanging."""
+
 MATCH_TOLERANCE = 0.25
 """Largest distance between a rail seat and its row of a rate-field file, as a fraction of
 the sleeper spacing [-]."""
@@ -315,7 +321,8 @@ class Ballast:
 
     def tamp(self, level, state: BallastState, held, change) -> None:
         """Lift the sleepers ``held`` (2, n) bool with the rail by ``-change`` and pack the
-        ballast under them (tamping, `trackdyn.deterioration.maintenance`).
+        ballast under them (tamping, `trackdyn.deterioration.maintenance`): no tamped
+        sleeper hangs after it.
 
         Parameters
         ----------
@@ -330,6 +337,17 @@ class Ballast:
         """
         seated = state.deflection + change - self.weight / self.stiffness  # bears its weight
         self.void = np.where(held, seated - np.asarray(level), self.void)
+        # the rail does not follow a lift that changes from sleeper to sleeper (its
+        # bending carries it over the short waves of the tamped profile), so some of
+        # the sleepers seated above would hang from it; the machine packs the ballast
+        # under every sleeper it holds up to the sleeper at the rail's rest and presses
+        # it by the sleeper's own weight, until none hangs
+        squeeze = self.weight / self.stiffness
+        for _ in range(PACKING_PASSES):
+            hanging = np.where(held, self.state(level, state).hanging_gap, 0.0)
+            if hanging.max() <= PACKED_GAP:
+                break
+            self.void = self.void - np.where(hanging > PACKED_GAP, hanging + squeeze, 0.0)
 
     def geometry(self, measured: Geometry, state: BallastState, sign: float = 1.0) -> Geometry:
         """Unloaded space curve: measured plus the change of the rails' rest deflection
