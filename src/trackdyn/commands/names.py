@@ -82,7 +82,9 @@ WORDS = {
     "d1_sd_max_final": "largest D1 SD of a segment at the end",
     "first_trigger": "tonnage at which the first segment reaches the threshold",
     "interventions": "number of interventions",
-    "hanging_rail_seats_final": f"sleeper rail seats hanging at the end (gap over {HANGING_GAP * 1e3:g} mm)",
+    "hanging_rail_seats_final": (
+        f"sleeper rail seats hanging at the end (gap over {HANGING_GAP * 1e3:g} mm)"
+    ),
     "void_d1_share_max": "largest share of a segment's D1 unevenness due to voids",
     "d1_sd_mm": "D1 SD",
     "d1_sd_left_initial": "D1 SD of the left rail at the start",
