@@ -111,8 +111,11 @@ def deteriorate(smoke: bool, voids: bool, mgt: float | None) -> None:
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--smoke", action="store_true", help="a short run, for CI")
-    parser.add_argument("--deteriorate", action="store_true",
-                        help="the deterioration example, discrete against Winkler track")
+    parser.add_argument(
+        "--deteriorate",
+        action="store_true",
+        help="the deterioration example, discrete against Winkler track",
+    )
     parser.add_argument("--voids", action="store_true", help="with ballast under a void")
     parser.add_argument("--mgt", type=float, help="tonnage of --deteriorate [MGT]")
     args = parser.parse_args()
