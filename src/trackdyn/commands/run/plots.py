@@ -133,7 +133,7 @@ def plot_wheel_loads(ds, ax=None, *, delta: float = 0.3, marks=()) -> Figure:
             fontsize=9,
             loc="left",
         )
-    axes[-1, 0].set_ylabel("track stiffness [kN/mm]")
+    axes[-1, 0].set_ylabel("track stiffness [kN/mm]\n(sum over the contact's axles)")
     for a in axes[-2]:
         a.invert_yaxis()
     for a in axes.flat:
@@ -155,7 +155,8 @@ def plot_wheel_loads(ds, ax=None, *, delta: float = 0.3, marks=()) -> Figure:
 
 
 def plot_wheel_load_exceedance(ds, ax=None, *, delta: float = 0.3) -> Figure:
-    """Share of the run in which each contact's wheel load exceeds a value.
+    """Share of the run in which each contact's wheel load exceeds a value (solid) and
+    falls below it (dotted: the unloading tail).
 
     Samples are equally spaced in time, so at constant speed the share is also one of
     distance.
@@ -174,7 +175,11 @@ def plot_wheel_load_exceedance(ds, ax=None, *, delta: float = 0.3) -> Figure:
     for c in contacts:
         load = np.sort(ds.wheel_load.sel(contact=c).values)[::-1] / 1e3
         share = np.arange(1, load.size + 1) / load.size
-        axis.semilogy(load, share, **{**_contact_style(ds, contacts, c), "lw": 1.4})
+        style = {**_contact_style(ds, contacts, c), "lw": 1.4}
+        axis.semilogy(load, share, **style)
+        # the unloading tail: the share with a lower load, dotted, in the contact's colour
+        axis.semilogy(load[::-1], share, **{**style, "ls": ":", "label": None})
+    axis.plot([], [], color="grey", ls=":", lw=1.4, label="share with a lower load\n(unloading)")
     ps = ds.attrs["static_wheel_load_N"] / 1e3
     axis.axvspan(
         ps * (1 - delta),
@@ -186,7 +191,7 @@ def plot_wheel_load_exceedance(ds, ax=None, *, delta: float = 0.3) -> Figure:
     )
     axis.axvline(ps, color="k", lw=0.8, ls=":", label=f"Ps = {ps:.1f} kN")
     axis.set_xlabel("wheel load [kN]")
-    axis.set_ylabel("share of the run with a higher load [-]")
+    axis.set_ylabel("share of the run with a higher (solid)\nor lower (dotted) load [-]")
     axis.set_ylim(bottom=min(1e-4, 0.5 / max(ds.sizes["time"], 1)))
     axis.grid(alpha=0.3, which="both")
     legend_outside(axis, handlelength=3)
@@ -247,6 +252,7 @@ def plot_secondary(ds, ax=None, *, marks=()) -> Figure:
             x = ds.distance.values + offsets[s]
             _full_and_zoom(row, x, y, color=colour, lw=1.6, ls="-", label=s)
         row[0].set_ylabel(f"secondary displacement [mm]\n{name} bogie (compression +)")
+        _wedge_unloaded(row, ds, label=name == next(iter(groups)))
     for a in axes[:, 1]:
         a.set_xlim(*ZOOM_M)
         legend_outside(a)
@@ -257,6 +263,26 @@ def plot_secondary(ds, ax=None, *, marks=()) -> Figure:
     axes[-1, 1].set_xlabel(f"zoom {ZOOM_M[0]:g}-{ZOOM_M[1]:g} m [m]")
     fig.suptitle(f"Secondary suspension displacement: {run_title(ds)}")
     return finished(fig, ax)
+
+
+def _wedge_unloaded(axes, ds, label: bool) -> None:
+    """The extension ``-x_ss`` at which the wedge springs, compressed by ``x_ss`` at rest
+    (the vehicle's parameter), come unloaded and the wedges' friction vanishes, on
+    ``axes``."""
+    x_ss = ds.attrs.get("vehicle_x_ss")
+    if x_ss is None:
+        return
+    text = f"wedge springs unloaded, -x_ss = -{float(x_ss) * 1e3:.0f} mm"
+    for a in axes:
+        a.axhline(-float(x_ss) * 1e3, color="k", lw=1.0, ls="--", label=text if label else None)
+
+
+def _wedge_colour(ds, wedges, k: int, w: str):
+    """A wedge's colour: that of the contact of the same name (its rail's), else the k-th."""
+    contacts = [str(c) for c in ds.contact.values]
+    if w in contacts:
+        return _contact_style(ds, [c for c in wedges if c in contacts], w)["color"]
+    return TAB10[k % 10]
 
 
 def plot_wedge_friction(ds, ax=None) -> Figure:
@@ -285,7 +311,7 @@ def plot_wedge_friction(ds, ax=None) -> Figure:
                 disp[window.values],
                 force[window.values],
                 lw=1.0,
-                color=TAB10[k % 10],
+                color=_wedge_colour(ds, wedges, k, w),
                 label=w,
             )
     ax1.set_xlabel("displacement across the secondary suspension [mm] (compression +)")
