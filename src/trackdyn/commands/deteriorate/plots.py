@@ -26,19 +26,14 @@ def plot_geometry_evolution(ds, ax=None, *, title: str = "") -> Figure:
     title : str
         Figure title.
     """
-    fig, axes = panels(ax, 3, 1, figsize=(11, 9), sharex=True)
-    colours = plt.cm.viridis(np.linspace(0.0, 0.9, ds.sizes["snapshot"]))
+    fig, axes = panels(ax, 3, 1, figsize=(12, 9), sharex=True)
+    colours = _snapshot_colours(ds.sizes["snapshot"])
     for a, rail in zip(axes[:2], ds.rail.values, strict=True):
         for k, colour in enumerate(colours):
             mgt = float(ds.snapshot_mgt[k])
-            a.plot(
-                ds.distance,
-                ds.profile.isel(snapshot=k).sel(rail=rail) * 1e3,
-                color=colour,
-                lw=0.6,
-                label=f"{mgt:g} MGT",
-            )
-        a.set_ylabel(f"{rail} rail profile [mm]\n(down +)")
+            z = ds.profile.isel(snapshot=k).sel(rail=rail).values * 1e3
+            a.plot(ds.distance, z - z.mean(), color=colour, lw=0.6, label=f"{mgt:g} MGT")
+        a.set_ylabel(f"{rail} rail profile [mm]\nless its mean (down +)")
     final = ds.settlement.isel(mgt=-1)
     for rail in ds.rail.values:
         axes[2].plot(
@@ -52,7 +47,9 @@ def plot_geometry_evolution(ds, ax=None, *, title: str = "") -> Figure:
     for a in axes:
         a.invert_yaxis()
         a.grid(alpha=0.3)
-        a.legend(loc="upper right", fontsize=7, ncol=2)
+        a.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7)  # clear of the data
+    axes[0].set_title("each profile less its mean: the mean settlement (below) shifts the "
+                      "whole rail", fontsize=9, loc="left")  # fmt: skip
     axes[-1].set_xlabel("distance [m]")
     fig.suptitle(title or "Track geometry over accumulated traffic")
     return finished(fig, ax)
@@ -78,7 +75,7 @@ def plot_quality_evolution(ds, ax=None, *, title: str = "") -> Figure:
         for j, colour in enumerate(colours):
             lo, hi = float(ds.segment_start[j]), float(ds.segment_end[j])
             mgt, sd = _sawtooth(ds, rail, j)
-            a.plot(mgt, sd, "-", color=colour, lw=1.0, label=f"{lo:g}-{hi:g} m")
+            a.plot(mgt, sd, "-", color=colour, lw=1.0, label=f"{lo:.0f}-{hi:.0f} m")
             mine = ds.intervention_segment.values == j
             a.plot(
                 ds.intervention_mgt.values[mine],
@@ -88,6 +85,7 @@ def plot_quality_evolution(ds, ax=None, *, title: str = "") -> Figure:
                 ms=4,
             )
         a.axhline(threshold, color="k", ls="--", lw=1, label=f"threshold {threshold:g} mm")
+        a.plot([], [], "v", color="grey", ms=4, ls="none", label="tamping (D1 SD before it)")
         a.set_title(f"{rail} rail")
         a.set_xlabel("accumulated traffic [MGT]")
         a.grid(alpha=0.3)
@@ -125,9 +123,59 @@ def plot_settlement_map(ds, ax=None, *, title: str = "") -> Figure:
         a.set_ylabel(f"{rail} rail\naccumulated traffic [MGT]")
         a.set_ylim(0.0, float(ds.mgt[-1]))
         fig.colorbar(mesh, ax=a, label="settlement [mm]")
+        _zone_outlines(a, ds)
+        _tampings(a, ds)
     axes[-1].set_xlabel("sleeper position [m]")
     fig.suptitle(title or "Sleeper settlement")
     return finished(fig, ax)
+
+
+ZONE_COLOURS = {"open": "#e8e8e8", "approach": "#f4c27a", "structure": "#b39ddb"}
+"""Colour of each zone kind in the figures, the same in every run (a kind of the user's
+own takes one of `EXTRA_ZONE_COLOURS`); none is the red or green of the D1 SD scale."""
+
+EXTRA_ZONE_COLOURS = ("#90caf9", "#bcaaa4", "#f8bbd0", "#80cbc4")
+
+
+def zone_colours(kinds) -> dict:
+    """Colour of each zone kind in ``kinds`` (`ZONE_COLOURS`, others in sorted order)."""
+    others = sorted(set(kinds) - set(ZONE_COLOURS))
+    extra = {k: EXTRA_ZONE_COLOURS[i % len(EXTRA_ZONE_COLOURS)] for i, k in enumerate(others)}
+    return {**ZONE_COLOURS, **extra}
+
+
+def _snapshot_colours(n: int):
+    """The first snapshot black, the later ones along viridis from blue to yellow."""
+    later = plt.cm.viridis(np.linspace(0.25, 0.95, max(n - 1, 1)))[: n - 1]
+    return [(0.0, 0.0, 0.0, 1.0), *later]
+
+
+def _zone_outlines(ax, ds) -> None:
+    """Each stretch of a zone other than open track outlined in its kind's colour."""
+    x, kind = ds.sleeper_distance.values, ds.zone_kind.values.astype(str)
+    colours = zone_colours(set(kind))
+    starts = np.r_[0, np.flatnonzero(kind[1:] != kind[:-1]) + 1]
+    ends = np.r_[starts[1:], kind.size]
+    shown = set()
+    for i, j in zip(starts, ends, strict=True):
+        if kind[i] == "open":
+            continue
+        lo = 0.5 * (x[i - 1] + x[i]) if i else x[0]
+        hi = 0.5 * (x[j - 1] + x[j]) if j < x.size else x[-1]
+        ax.axvspan(lo, hi, fill=False, edgecolor=colours[kind[i]], lw=1.8,
+                   label=None if kind[i] in shown else kind[i])  # fmt: skip
+        shown.add(kind[i])
+
+
+def _tampings(ax, ds) -> None:
+    """A white circle at each tamping, at the middle of its segment."""
+    seg = ds.intervention_segment.values
+    if seg.size:
+        mid = 0.5 * (ds.segment_start.values + ds.segment_end.values)
+        ax.plot(mid[seg], ds.intervention_mgt.values, "o", ms=5, mfc="white", mec="k",
+                ls="none", label="tamping (segment middle)")  # fmt: skip
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(loc="upper left", fontsize=7)
 
 
 def _segment_colours(n: int):
@@ -176,9 +224,10 @@ def plot_straight_line(ds, ax=None, *, title: str = "") -> Figure:
     x = ds.sleeper_distance.values
     kind = ds.zone_kind.values.astype(str)
     names = sorted(set(kind))
-    colours = plt.cm.Pastel1(np.arange(len(names)) % 9)
-    for k, name in enumerate(names):
-        top.fill_between(x, 0, 1, where=kind == name, color=colours[k], step="mid", label=name)
+    colours = zone_colours(names)
+    for name in names:
+        top.fill_between(x, 0, 1, where=kind == name, color=colours[name], step="mid",
+                         label=name)  # fmt: skip
     hanging = ds.hanging_gap.isel(mgt=-1).max("rail").values > VOID_SHOWN
     top.plot(x[hanging], np.full(hanging.sum(), 0.5), "v", color="k", ms=4,
              label=f"hanging > {VOID_SHOWN * 1e3:g} mm at the end")  # fmt: skip
@@ -190,9 +239,16 @@ def plot_straight_line(ds, ax=None, *, title: str = "") -> Figure:
     return fig  # laid out by hand: tight_layout does not fit the shared colour bar
 
 
+D1_SCALE_MM = 4.0
+"""Top of the D1 SD colour scale of the straight-line diagrams [mm], the same in every run
+(beyond the 2.5 mm of EN 13848-6 class D at 80-120 km/h); raised to the worst value where
+a run goes past it."""
+
+
 def _top(ds, threshold: float) -> float:
-    """Top of the D1 SD colour scale [mm]: twice the threshold, or the worst value."""
-    return max(2 * threshold, float(ds.d1_sd.max()))
+    """Top of the D1 SD colour scale [mm]: `D1_SCALE_MM`, or the threshold or the worst
+    value where higher."""
+    return max(D1_SCALE_MM, threshold, float(ds.d1_sd.max()))
 
 
 def _quality_mesh(ax, ds, offset: float, vmax: float):
