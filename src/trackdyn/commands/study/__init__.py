@@ -81,7 +81,7 @@ def write_study(table, ds, study, folder, sleeper_spacing=None) -> list[str]:
         figures["sensitivity"] = ("tornado.png", plot_tornado)
     if study.kind in figures:
         name, draw = figures[study.kind]
-        save(draw(table), folder / name)
+        save(draw(table, context=_context(ds, table, study)), folder / name)
         names.append(name)
     synthetic = WAVELENGTH_RANGE[0] if study.track.geometry is None else None
     fig = plot_spectra(
@@ -93,6 +93,16 @@ def write_study(table, ds, study, folder, sleeper_spacing=None) -> list[str]:
     )
     save(fig, folder / "spectra.png")
     return [*names, "spectra.png"]
+
+
+def _context(ds, table, study) -> str:
+    """What a study's runs share, for its figure's title: model, speed, vehicles."""
+    parts = [f"{ds.attrs['model']} model"]
+    if study.kind != "speed":
+        parts.append(f"{study.run.speed_kmh:g} km/h")
+    if "vehicle" in table:
+        parts.append(", ".join(dict.fromkeys(table["vehicle"].astype(str))))
+    return ", ".join(parts)
 
 
 @recorded

@@ -8,7 +8,7 @@ import numpy as np
 from trackdyn.commands.plots import TAB10, Figure, finished, legend_outside, panels, plt
 
 
-def plot_study_matrix(table, ax=None) -> Figure:
+def plot_study_matrix(table, ax=None, *, context: str = "") -> Figure:
     """Dynamic wheel load SD and max per excitation case, grouped by vehicle and damping.
 
     Parameters
@@ -17,6 +17,8 @@ def plot_study_matrix(table, ax=None) -> Figure:
         A matrix study's table (`trackdyn.studies.runner.gather`).
     ax : array of 2 matplotlib Axes, optional
         Where to draw the SD and the max; default: a new figure.
+    context : str
+        What the runs share (model, speed), for the title.
     """
     ok = table[table["error"] == ""]
     groups = list(ok.groupby(["vehicle", "damping"], sort=False))
@@ -37,7 +39,8 @@ def plot_study_matrix(table, ax=None) -> Figure:
         a.grid(alpha=0.3, axis="y")
     legend_outside(axes[1])
     fig.suptitle(
-        "(i) geometry, rigid track  (ii) geometry, constant stiffness  "
+        (f"Excitation cases: {context}\n" if context else "")
+        + "(i) geometry, rigid track  (ii) geometry, constant stiffness  "
         "(iii) stiffness, level track  (iv) both",
         fontsize=9,
     )
@@ -54,7 +57,7 @@ def _parameter_name(name: str) -> str:
     return f"{text}\n({name}, {unit})"
 
 
-def plot_tornado(table, ax=None, *, column: str = "dyn_load_sd_kN") -> Figure:
+def plot_tornado(table, ax=None, *, column: str = "dyn_load_sd_kN", context: str = "") -> Figure:
     """Change of ``column`` from the baseline at the lowest and highest factor per parameter.
 
     Parameters
@@ -98,7 +101,8 @@ def plot_tornado(table, ax=None, *, column: str = "dyn_load_sd_kN") -> Figure:
     axis.axvline(0, color="k", lw=0.8)
     axis.set_xlabel(f"change of {quantity} from the baseline, {base:.2f} {unit.strip('[]')} {unit}")
     notes = [note for symbol, note in NOTES.items() if symbol in quantity]
-    axis.set_title("\n".join([f"Sensitivity of {quantity} to the vehicle parameters", *notes]))
+    head = f"Sensitivity of {quantity} to the vehicle parameters"
+    axis.set_title("\n".join([f"{head}: {context}" if context else head, *notes]))
     axis.grid(alpha=0.3, axis="x")
     return finished(fig, ax)
 
@@ -213,6 +217,10 @@ def plot_spectra(
                         a.plot([], [], color="0.3", lw=1.0, ls=ls, label=text)
                     a.axvline(f, color=colour, lw=1.0, ls=ls)
         a.set_ylabel("PSD [kN²/Hz]")
+        shown = runs.index.union(ok.index[baseline])
+        peak = float(ds.wheel_load_psd.isel(run=list(shown)).max()) if len(shown) else 0.0
+        if peak > 0:  # below: the numerical floor of the spectrum, not data
+            a.set_ylim(bottom=peak * PSD_RANGE)
         if split is not None:
             a.set_title(f"{split} {panel}", fontsize=10, loc="left")
         a.grid(alpha=0.3, which="both")
@@ -222,8 +230,15 @@ def plot_spectra(
     return finished(fig, ax)
 
 
-def plot_speed_sweep(table, ax=None) -> Figure:
-    """Dynamic wheel load against speed.
+PSD_RANGE = 1e-6
+"""Lowest wheel-load PSD shown, as a share of the panel's peak [-]: beyond the synthetic
+geometry's cut-off the spectrum falls to its numerical floor (1e-8 kN²/Hz), which is no
+part of the wheel load."""
+
+
+def plot_speed_sweep(table, ax=None, *, context: str = "") -> Figure:
+    """Dynamic wheel load (largest, smallest: the unloading, and standard deviation)
+    against speed.
 
     Parameters
     ----------
@@ -231,14 +246,19 @@ def plot_speed_sweep(table, ax=None) -> Figure:
         A speed study's table (`trackdyn.studies.runner.gather`).
     ax : matplotlib.axes.Axes, optional
         Where to draw; default: a new figure.
+    context : str
+        What the runs share (model, vehicle), for the title.
     """
     ok = table[table["error"] == ""].sort_values("speed_kmh")
     fig, axis = panels(ax, figsize=(9, 5))
-    axis.plot(ok["speed_kmh"], ok["dyn_load_max_kN"], "o-", label="max")
+    axis.plot(ok["speed_kmh"], ok["dyn_load_max_kN"], "o-", label="largest")
+    axis.plot(ok["speed_kmh"], ok["dyn_load_min_kN"], "v-", label="smallest (unloading)")
     axis.plot(ok["speed_kmh"], ok["dyn_load_sd_kN"], "s-", label="standard deviation")
+    axis.axhline(0.0, color="k", lw=0.8)
     axis.set_xlabel("speed [km/h]")
-    axis.set_ylabel("dynamic wheel load [kN]")
-    axis.set_title("Dynamic wheel load against speed")
+    axis.set_ylabel("dynamic wheel load [kN]\n(wheel load less the static load)")
+    head = "Dynamic wheel load against speed"
+    axis.set_title(f"{head}\n{context}" if context else head)
     axis.grid(alpha=0.3)
     legend_outside(axis)
     return finished(fig, ax)
