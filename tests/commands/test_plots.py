@@ -25,6 +25,7 @@ def speed_table():
         {
             "speed_kmh": [40.0, 60.0, 80.0],
             "dyn_load_max_kN": [10.0, 14.0, 21.0],
+            "dyn_load_min_kN": [-9.0, -13.0, -19.0],
             "dyn_load_sd_kN": [2.0, 3.0, 5.0],
             "error": ["", "", ""],
         }
