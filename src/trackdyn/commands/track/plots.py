@@ -124,8 +124,11 @@ def plot_load_deflection(picks, ax=None, *, static_load: float, delta: float) ->
             zorder=3,
             label="linearised: slope k2 through (ys, Ps)" if j == 0 else None,
         )
-    for level in (ps - dp, ps, ps + dp):
+    for level, name in ((ps - dp, "Ps - ΔP"), (ps, "Ps"), (ps + dp, "Ps + ΔP")):
         axis.axhline(level / 1e3, color="grey", lw=0.6, ls=":")
+        axis.annotate(f"{name} = {level / 1e3:.1f} kN", (0.0, level / 1e3), fontsize=8,
+                      color="0.35", xycoords=("axes fraction", "data"), xytext=(3, 2),
+                      textcoords="offset points")  # fmt: skip
     axis.set_xlabel("deflection [mm]")
     axis.set_ylabel("wheel load [kN]")
     axis.set_title(
@@ -134,6 +137,19 @@ def plot_load_deflection(picks, ax=None, *, static_load: float, delta: float) ->
     legend_outside(axis)
     axis.grid(alpha=0.3)
     return finished(fig, ax)
+
+
+def _flag_uplift(ax1, ax2, sol, x0) -> None:
+    """Mark where the rail lifts (deflection below zero) and where a support pulls."""
+    up = sol.deflection < 0
+    if up.any():
+        ax1.plot(sol.x[up] - x0, sol.deflection[up] * 1e3, ".", color="tab:purple", ms=2,
+                 label=f"rail lifts, up to {-sol.deflection.min() * 1e3:.1f} mm")  # fmt: skip
+    pull = sol.support_force < -1e-3 * np.abs(sol.support_force).max()  # not round-off
+    if pull.any():
+        text = f"support in tension, down to {sol.support_force.min() / 1e3:.1f} kN"
+        ax2.plot(sol.support_position[pull] - x0, sol.support_force[pull] / 1e3, "^",
+                 color="tab:purple", ms=6, label=text)  # fmt: skip
 
 
 def plot_deflection_basin(basin, ax=None, *, load: float) -> Figure:
@@ -168,8 +184,10 @@ def plot_deflection_basin(basin, ax=None, *, load: float) -> Figure:
             mew=2,
             label="hanging sleeper (no load)",
         )
-        for x in with_gap.support_position[hanging] - x0:
-            ax1.axvline(x, color="tab:red", lw=0.8, alpha=0.5)
+        for k, x in enumerate(with_gap.support_position[hanging] - x0):
+            ax1.axvline(x, color="tab:red", lw=0.8, alpha=0.5,
+                        label="hanging sleeper" if k == 0 else None)  # fmt: skip
+    _flag_uplift(ax1, ax2, with_gap, x0)
     ax1.invert_yaxis()
     ax1.set_ylabel("rail deflection [mm] (down +)")
     ax2.set_ylabel("sleeper load [kN]")
