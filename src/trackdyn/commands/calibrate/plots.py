@@ -133,7 +133,8 @@ def plot_field(field, ax=None, *, extent) -> Figure:
     axes[0].legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     axes[-1].set_xlabel("distance [m]")
     fig.suptitle(
-        f"Estimated settlement-rate field (cov {field.cov:.2f} of the data-chosen prior, "
-        f"noise {field.noise_mm:.3f} mm)"
+        "How fast the ballast under each rail seat settles, relative to the fitted law\n"
+        f"(spread allowed: coefficient of variation {field.cov:.2f}, chosen from the surveys; "
+        f"survey noise {field.noise_mm:.3f} mm)"
     )
     return finished(fig, ax)

@@ -197,6 +197,16 @@ def steps_table(ds) -> pd.DataFrame:
     )
 
 
+def _line_title(datasets) -> str:
+    """Title of a line's straight-line diagram: its sections, length and tonnage."""
+    names = [str(ds.attrs["section"]) for ds in datasets]
+    shown = ", ".join(names) if len(names) <= 4 else f"{names[0]} ... {names[-1]}"
+    length = sum(float(ds.segment_end[-1] - ds.segment_start[0]) for ds in datasets)
+    mgt = max(float(ds.mgt[-1]) for ds in datasets)
+    return (f"Straight-line diagram of the line: {len(names)} sections ({shown}), "
+            f"{length / 1e3:.2f} km, {mgt:g} MGT")  # fmt: skip
+
+
 def write_outputs(datasets, folder) -> list[str]:
     """Write every file of a prediction into ``folder``; return the file names.
 
@@ -237,7 +247,7 @@ def write_outputs(datasets, folder) -> list[str]:
             save(draw(ds, title=title), folder / f"{name}_{kind}.png")
             names.append(f"{name}_{kind}.png")
     if len(datasets) > 1:
-        save(plot_line(datasets, title=f"{len(datasets)} sections"), folder / "line.png")
+        save(plot_line(datasets, title=_line_title(datasets)), folder / "line.png")
         names.append("line.png")
     csv(summary(datasets), "summary.csv")
     tables = [
