@@ -201,21 +201,25 @@ def plot_spectra(
             )
         speeds = sorted(set(runs["speed_kmh"])) if "speed_kmh" in runs else [speed_kmh]
         lines = (
-            (sleeper_spacing, "sleeper passing", "--"),
-            (shortest_wavelength, "synthetic geometry cut-off", ":"),
+            (sleeper_spacing, "sleeper passing", "--", "v"),
+            (shortest_wavelength, "synthetic geometry cut-off", ":", "o"),
         )
-        for k, v in enumerate(speeds):
-            colour = colours.get(v, "0.3") if colour_by == "speed_kmh" else "0.3"
-            for length, name, ls in lines:
-                if length:
-                    f = v / 3.6 / length
-                    if len(speeds) > 1:
-                        text = f"{name}, {length:g} m: at each speed, in its colour"
-                    else:
-                        text = f"{name}, {length:g} m: {f:.1f} Hz"
-                    if k == 0:  # the legend entry in grey: the lines take the speeds' colours
-                        a.plot([], [], color="0.3", lw=1.0, ls=ls, label=text)
-                    a.axvline(f, color=colour, lw=1.0, ls=ls)
+        for length, name, ls, marker in lines:
+            if not length:
+                continue
+            if len(speeds) == 1:
+                f = speeds[0] / 3.6 / length
+                a.axvline(f, color="0.3", lw=1.0, ls=ls, label=f"{name}, {length:g} m: {f:.1f} Hz")
+                continue
+            # one frequency per speed: a marker on each run's curve, not a line per speed
+            a.plot([], [], marker, color="0.3", mfc="none", ls="none",
+                   label=f"{name}, {length:g} m: on each speed's curve")  # fmt: skip
+            for run, row in runs.iterrows():
+                f = row["speed_kmh"] / 3.6 / length
+                psd = ds.wheel_load_psd.isel(run=run).values[positive]
+                colour = colours[row[colour_by]] if colour_by else "tab:blue"
+                a.plot(f, np.interp(f, freq[positive], psd), marker, color=colour, mfc="none",
+                       ms=7, mew=1.5)  # fmt: skip
         a.set_ylabel("PSD [kN²/Hz]")
         shown = runs.index.union(ok.index[baseline])
         peak = float(ds.wheel_load_psd.isel(run=list(shown)).max()) if len(shown) else 0.0
@@ -225,6 +229,10 @@ def plot_spectra(
             a.set_title(f"{split} {panel}", fontsize=10, loc="left")
         a.grid(alpha=0.3, which="both")
         legend_outside(a)
+    labels = [tuple(a.get_legend_handles_labels()[1]) for a in axes[:, 0]]
+    if len(set(labels)) == 1:  # the same runs in every panel: one legend, the first
+        for a in axes[1:, 0]:
+            a.get_legend().remove()
     axes[-1, 0].set_xlabel("frequency [Hz]")
     fig.suptitle(f"Dynamic wheel load spectra: {ds.attrs['kind']} study, {ds.attrs['model']}")
     return finished(fig, ax)
