@@ -63,7 +63,8 @@ def plot_track_overview(ds, ax=None, *, marks=(), threshold_sd_mm: float | None 
                 label=f"{band}, {rail} rail",
             )
     if threshold_sd_mm is not None:
-        label = f"D1 threshold {threshold_sd_mm:g} mm\n(deteriorate default)"
+        label = (f"D1 threshold {threshold_sd_mm:g} mm of deteriorate\n(its built-in example "
+                 "starts tamped,\nbelow this measured state)")  # fmt: skip
         axes[4].axhline(threshold_sd_mm, color="k", lw=1, ls="--", label=label)
     axes[4].set_ylim(bottom=0)
     for a in axes[:3]:
