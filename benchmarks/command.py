@@ -1,0 +1,132 @@
+"""The command around the loop: ``trackdyn deteriorate`` on a line, in single runs.
+
+Run with ``python benchmarks/command.py`` (``--smoke``: 2 sections of 300 m through 1 MGT,
+a short check for CI). Writes a line of 4 synthetic sections of 500 m (FRA class 5
+geometry, different seeds, the example's stiffness field), a sections CSV and a scenario
+TOML (the built-in example's traffic, law, loop and 11-DOF model, tamped start, 50 MGT,
+no maintenance) into a temporary folder, then:
+
+1. times one 11-DOF `simulate` of the loaded wagon over the first 500 m section in this
+   process (best of 5, the compiled loop loaded beforehand);
+2. runs ``trackdyn -q deteriorate`` on the line in a new process, as a user would (start-up
+   included; ``--workers`` as given, default none: the command's own choice), best of
+   ``--tries``, and reports its wall time per section in single runs (goal: at most 10);
+3. with ``--profile``, runs the command once more under ``cProfile`` with
+   ``TRACKDYN_PHASES`` (a phase-by-phase split written by the command: imports, the
+   compiled-code cache, the runs, the outputs, the figures) and prints the split.
+
+The compiled-code cache is the user's (warm); ``benchmarks/coldstart.py`` measures a cold
+one.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from line import write_line
+
+SCENARIO = """\
+[run]
+model = "11dof"
+
+[[traffic]]
+vehicle = "loaded"
+speed_kmh = 60
+passages_per_mgt = 8065
+[[traffic]]
+vehicle = "empty"
+speed_kmh = 60
+passages_per_mgt = 8065
+
+[settlement]
+law = "power"
+
+[loop]
+total_mgt = {mgt}
+snapshot_every_mgt = {snapshot}
+
+[track]
+sections = "sections.csv"
+start = "tamped"
+"""
+
+GOAL = 10.0
+"""Goal: a section's deterioration through 50 MGT, start-up included, in single runs."""
+
+
+def one_run(csv: Path, repeat: int) -> float:
+    """Best wall time of one `simulate` over the line's first section [s]."""
+    from trackdyn.commands.deteriorate.scenario import load_deterioration
+    from trackdyn.data import load_track
+    from trackdyn.simulation import simulate
+    from trackdyn.vehicle.parameters import load_vehicle
+
+    spec, _ = load_deterioration(None)
+    folder = csv.parent
+    track = load_track(folder / "km0_geometry.csv", folder / "km0_supports.csv")
+    vehicle = load_vehicle("loaded")
+    simulate(vehicle, track, spec.run)  # compile or load from numba's cache
+    best = float("inf")
+    for _ in range(repeat):
+        clock = time.perf_counter()
+        simulate(vehicle, track, spec.run)
+        best = min(best, time.perf_counter() - clock)
+    return best
+
+
+def command(folder: Path, workers: int | None, env: dict | None = None) -> float:
+    """Wall time of ``trackdyn -q deteriorate`` on the line in a new process [s]."""
+    args = [sys.executable, "-m", "trackdyn", "-q", "deteriorate", str(folder / "line.toml"),
+            "--out", str(folder / "out"), "--overwrite"]  # fmt: skip
+    if workers is not None:
+        args += ["--workers", str(workers)]
+    clock = time.perf_counter()
+    subprocess.run(args, check=True, stdout=subprocess.DEVNULL, env=env)
+    return time.perf_counter() - clock
+
+
+def phases(folder: Path, workers: int | None) -> None:
+    """Run the command once with ``TRACKDYN_PHASES`` and print the split it wrote."""
+    split = folder / "phases.txt"
+    env = {**os.environ, "TRACKDYN_PHASES": str(split)}
+    wall = command(folder, workers, env)
+    print(f"phases of one run ({wall:.2f} s wall):")
+    print(split.read_text().rstrip())
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--smoke", action="store_true", help="2 sections of 300 m, 1 MGT")
+    parser.add_argument("--workers", type=int, default=None, help="the command's --workers")
+    parser.add_argument("--tries", type=int, default=3, help="runs of the command")
+    parser.add_argument("--profile", action="store_true", help="the command's phases")
+    opts = parser.parse_args()
+    n, length, mgt, repeat = (2, 300.0, 1.0, 1) if opts.smoke else (4, 500.0, 50.0, 5)
+    tries = 1 if opts.smoke else opts.tries
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        csv = write_line(folder, n, length)
+        snapshot = mgt if opts.smoke else 10
+        (folder / "line.toml").write_text(SCENARIO.format(mgt=mgt, snapshot=snapshot))
+        single = one_run(csv, repeat)
+        walls = [command(folder, opts.workers) for _ in range(tries)]
+        if opts.profile:
+            phases(folder, opts.workers)
+    wall = min(walls)
+    workers = "default" if opts.workers is None else opts.workers
+    print(f"one simulate over {length:g} m (11-DOF, loaded wagon): {single * 1e3:.0f} ms "
+          f"(best of {repeat})")  # fmt: skip
+    print(f"trackdyn deteriorate, {n} x {length:g} m through {mgt:g} MGT, --workers {workers}: "
+          f"{wall:.2f} s wall (best of {tries}: {', '.join(f'{w:.2f}' for w in walls)})")  # fmt: skip
+    print(f"  a section in single runs, start-up included: {wall / n / single:.1f} "
+          f"(goal: at most {GOAL:g})")  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()
