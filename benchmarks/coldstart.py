@@ -8,10 +8,11 @@ filled (the warm run). Reported: both wall times, their difference (goal: at mos
 `GOAL_S`) and the machine's load average over the last minute before each run (the
 machine is shared: read the differences with it).
 
-``--kernels`` compiles in this process instead, with an empty cache, what ``trackdyn run``
-and ``trackdyn deteriorate`` compile on their built-in examples (``--workers 1``), and lists
-numba's compile time per function: its signatures (specialisations) compiled, the time
-inclusive of the functions compiled inside it, and its own (exclusive) time.
+``--kernels`` compiles in this process instead, with an empty cache, what ``trackdyn run``,
+``trackdyn study`` and ``trackdyn deteriorate`` compile on their built-in examples
+(``--workers 1``: the runs in this process, as a Dask worker runs them), and lists numba's
+compile time per function: its signatures (specialisations) compiled, the time inclusive of
+the functions compiled inside it, and its own (exclusive) time.
 """
 
 from __future__ import annotations
@@ -79,12 +80,12 @@ def kernels() -> None:
 
     with tempfile.TemporaryDirectory() as out, event.install_recorder("numba:compile") as rec:
         clock = time.perf_counter()
-        for args in (["run"], ["deteriorate", "--workers", "1"]):
+        for args in (["run"], ["study", "--workers", "1"], ["deteriorate", "--workers", "1"]):
             app(["-q", *args, "--out", f"{out}/{args[0]}"], standalone_mode=False)
         wall = time.perf_counter() - clock
     rows = compile_times(rec.buffer)
     total = sum(own for _, _, own in rows.values())
-    print(f"run + deteriorate in one process, empty cache: {wall:.1f} s wall, "
+    print(f"run, study, deteriorate in one process, empty cache: {wall:.1f} s wall, "
           f"{total:.1f} s compiling ({len(rows)} functions)")  # fmt: skip
     print(f"{'function':50s} {'signatures':>10s} {'inclusive [s]':>14s} {'own [s]':>8s}")
     for name, (count, inclusive, own) in sorted(rows.items(), key=lambda r: -r[1][2]):

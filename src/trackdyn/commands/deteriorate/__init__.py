@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 
+from trackdyn.commands.compiling import say_if_compiling
 from trackdyn.commands.geometry_notes import PREFIX, geometry_notes
 from trackdyn.commands.staging import Record, output_folder
 from trackdyn.commands.tables import deterioration_table, forecast_table, frame_table
@@ -56,6 +57,7 @@ def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> 
 
         plan = plan_forecast(spec, base, tasks)
     with output_folder(out, "deteriorate", overwrite, record) as stage:
+        say_if_compiling("deteriorate", scheduler)
         datasets = run_sections(tasks, workers=workers, scheduler=scheduler, progress=not serial)
         for ds in datasets:
             attrs = ds.attrs.items()
