@@ -11,9 +11,9 @@ no maintenance) into a temporary folder, then:
 2. runs ``trackdyn -q deteriorate`` on the line in a new process, as a user would (start-up
    included; ``--workers`` as given, default none: the command's own choice), best of
    ``--tries``, and reports its wall time per section in single runs (goal: at most 10);
-3. with ``--profile``, runs the command once more under ``cProfile`` with
-   ``TRACKDYN_PHASES`` (a phase-by-phase split written by the command: imports, the
-   compiled-code cache, the runs, the outputs, the figures) and prints the split.
+3. with ``--profile``, runs the command once more under ``cProfile`` and prints where
+   its time went: imports, the runs (reading the tracks, the loops, the solver, which
+   includes loading the compiled loops from numba's cache), netCDF, figures.
 
 The compiled-code cache is the user's (warm); ``benchmarks/coldstart.py`` measures a cold
 one.
@@ -80,24 +80,64 @@ def one_run(csv: Path, repeat: int) -> float:
     return best
 
 
-def command(folder: Path, workers: int | None, env: dict | None = None) -> float:
+def command(folder: Path, workers: int | None) -> float:
     """Wall time of ``trackdyn -q deteriorate`` on the line in a new process [s]."""
     args = [sys.executable, "-m", "trackdyn", "-q", "deteriorate", str(folder / "line.toml"),
             "--out", str(folder / "out"), "--overwrite"]  # fmt: skip
     if workers is not None:
         args += ["--workers", str(workers)]
     clock = time.perf_counter()
-    subprocess.run(args, check=True, stdout=subprocess.DEVNULL, env=env)
+    subprocess.run(args, check=True, stdout=subprocess.DEVNULL)
     return time.perf_counter() - clock
 
 
+PHASES = {
+    "imports (inside the command)": ("_bootstrap>", "_find_and_load"),
+    "the runs (run_sections: tracks read, loops)": ("runs.py", "run_sections"),
+    "  of which the loops stepped together": ("driver.py", "step_together"),
+    "  of which the solver (compiled loops)": ("solver/__init__.py", "solve"),
+    "outputs (write_outputs)": ("outputs.py", "write_outputs"),
+    "  of which netCDF": ("netcdf.py", "write_netcdf"),
+    "  of which figures drawn (plot_*)": ("deteriorate/plots.py", "plot_"),
+    "  of which figures saved (PNG)": ("commands/plots.py", "save"),
+}
+"""Phases of the command's profile: (end of the file name, the function's name, or the start
+of the names of several when it ends in ``_``)."""
+
+PROFILED = """
+import cProfile, pstats, sys
+from trackdyn.cli import app
+profile = cProfile.Profile()
+profile.enable()
+app(sys.argv[2:], standalone_mode=False)
+profile.disable()
+profile.dump_stats(sys.argv[1])
+"""
+
+
 def phases(folder: Path, workers: int | None) -> None:
-    """Run the command once with ``TRACKDYN_PHASES`` and print the split it wrote."""
-    split = folder / "phases.txt"
-    env = {**os.environ, "TRACKDYN_PHASES": str(split)}
-    wall = command(folder, workers, env)
-    print(f"phases of one run ({wall:.2f} s wall):")
-    print(split.read_text().rstrip())
+    """Run the command once under cProfile and print where its time went."""
+    import pstats
+
+    stats = folder / "command.prof"
+    args = ["-q", "deteriorate", str(folder / "line.toml"), "--out", str(folder / "out"),
+            "--overwrite"]  # fmt: skip
+    if workers is not None:
+        args += ["--workers", str(workers)]
+    clock = time.perf_counter()
+    subprocess.run([sys.executable, "-c", PROFILED, str(stats), *args], check=True,
+                   stdout=subprocess.DEVNULL)  # fmt: skip
+    wall = time.perf_counter() - clock
+    table = pstats.Stats(str(stats)).stats  # (file, line, name) -> (.., .., .., cumulative, ..)
+    total = max(row[3] for row in table.values())
+    print(f"one run under cProfile: {wall:.2f} s wall, {total:.2f} s in the command")
+    for label, (file, name) in PHASES.items():
+        # cumulative: a call inside another of the same function (an import inside an
+        # import) counted once
+        took = sum(row[3] for (f, _, n), row in table.items()
+                   if f.endswith(file) and (n == name or name.endswith("_") and
+                                            n.startswith(name)))  # fmt: skip
+        print(f"  {label:45s} {took:6.2f} s")
 
 
 def main() -> None:
@@ -115,6 +155,7 @@ def main() -> None:
         snapshot = mgt if opts.smoke else 10
         (folder / "line.toml").write_text(SCENARIO.format(mgt=mgt, snapshot=snapshot))
         single = one_run(csv, repeat)
+        load = os.getloadavg()[0]
         walls = [command(folder, opts.workers) for _ in range(tries)]
         if opts.profile:
             phases(folder, opts.workers)
@@ -122,8 +163,9 @@ def main() -> None:
     workers = "default" if opts.workers is None else opts.workers
     print(f"one simulate over {length:g} m (11-DOF, loaded wagon): {single * 1e3:.0f} ms "
           f"(best of {repeat})")  # fmt: skip
+    each = ", ".join(f"{w:.2f}" for w in walls)
     print(f"trackdyn deteriorate, {n} x {length:g} m through {mgt:g} MGT, --workers {workers}: "
-          f"{wall:.2f} s wall (best of {tries}: {', '.join(f'{w:.2f}' for w in walls)})")  # fmt: skip
+          f"{wall:.2f} s wall (best of {tries}: {each}); load {load:.1f}")  # fmt: skip
     print(f"  a section in single runs, start-up included: {wall / n / single:.1f} "
           f"(goal: at most {GOAL:g})")  # fmt: skip
 
