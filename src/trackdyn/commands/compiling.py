@@ -26,7 +26,7 @@ KERNELS: dict[str, tuple[tuple[str, str], ...]] = {
 package, function), from ``benchmarks/coldstart.py --kernels``; a command not here (track,
 example) compiles little."""
 
-SECONDS: dict[str, int] = {"run": 5, "study": 30, "deteriorate": 15, "calibrate": 30}
+SECONDS: dict[str, int] = {"run": 5, "study": 30, "deteriorate": 12, "calibrate": 12}
 """Per command, what its first run took longer than the next on the built-in example on
 this project's 2-core machine (``benchmarks/coldstart.py``), rounded up [s]."""
 
