@@ -403,7 +403,7 @@ def interventions(path, out, overwrite: bool, workers, scheduler, console) -> No
                         {"study": study.model_dump(mode="json"),
                          "scenario": spec.model_dump(mode="json")}, currency=code)  # fmt: skip
         with output_folder(out, "study", overwrite, record) as stage:
-            say_if_compiling("study", scheduler)
+            say_if_compiling("interventions", scheduler)
             datasets = run_alternatives(labelled, workers=workers, scheduler=scheduler,
                                         progress=True)  # fmt: skip
             table, segments = compare(study, [alt for alt, _ in labelled], datasets, rates)
