@@ -225,7 +225,10 @@ def deteriorate(
     overwrite: OverwriteOption = False,
     workers: Annotated[
         int | None,
-        typer.Option(help="Worker processes (default: one per core, 1 for one section)."),
+        typer.Option(
+            help="Worker processes (default: one per core; none, this process only, for up "
+            "to 8 sections through 200 MGT in all)."
+        ),
     ] = None,
     scheduler: Annotated[
         str | None, typer.Option(help="Address of a running Dask scheduler, tcp://HOST:PORT.")

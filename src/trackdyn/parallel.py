@@ -138,6 +138,11 @@ def shared_cluster(workers: int | None = None, scheduler: str | None = None):
             _shared.reset(token)
 
 
+def sharing() -> bool:
+    """Whether a `shared_cluster` block holds a Dask client (its `run_tasks` calls use it)."""
+    return _shared.get() is not None
+
+
 @contextlib.contextmanager
 def _cluster(workers: int | None, scheduler: str | None):
     """A Dask client (of a local cluster, or of ``scheduler``), closed with its cluster at

@@ -82,16 +82,26 @@ def test_listing_and_unknown_example(tmp_path):
 @pytest.mark.parametrize("name", list(EXAMPLES))
 def test_every_example_runs_as_its_command_says(name, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    command = runner.invoke(app, ["example", name, "--to", "ex"]).stdout.split()
-    assert command[0] == "trackdyn"
-    serial = ["--workers", "1"] if command[1] != "run" else []
-    result = runner.invoke(app, ["-q", *command[1:], *serial])
-    assert result.exit_code == 0, result.output
-    if name == "survey":  # what was done to a recording car's file is said, even with -q
-        assert "profile recovered from versines" in result.stderr
-    else:
-        assert result.stderr == ""  # -q: the results on stdout, nothing else
-    assert (tmp_path / command[-1] / ".trackdyn.json").is_file()
+    for line in runner.invoke(app, ["example", name, "--to", "ex"]).stdout.splitlines():
+        command = line.split()
+        assert command[0] == "trackdyn"
+        serial = ["--workers", "1"] if command[1] != "run" else []
+        result = runner.invoke(app, ["-q", *command[1:], *serial])
+        assert result.exit_code == 0, result.output
+        if name == "survey":  # what was done to a recording car's file is said, even with -q
+            assert "profile recovered from versines" in result.stderr
+        else:
+            assert result.stderr == ""  # -q: the results on stdout, nothing else
+        assert (tmp_path / command[-1] / ".trackdyn.json").is_file()
+
+
+def test_the_study_example_names_each_of_its_studies(tmp_path):
+    to = tmp_path / "ex"
+    lines = runner.invoke(app, ["example", "study", "--to", str(to)]).stdout.splitlines()
+    studies = [line.split()[2] for line in lines]  # trackdyn study FILE --out DIR
+    assert studies == [str(to / n) for n in ("matrix-2dof.toml", "sensitivity.toml", "speed.toml")]
+    assert set(EXAMPLES["study"][1]) == {"matrix-2dof.toml", "sensitivity.toml", "speed.toml"}
+    assert len({line.split()[-1] for line in lines}) == 3  # each its own output folder
 
 
 def test_example_refuses_to_overwrite_files_unless_told(tmp_path):

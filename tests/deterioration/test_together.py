@@ -145,3 +145,26 @@ def test_a_failed_vehicle_run_stops_its_section_with_the_run_s_status(tasks, mon
     monkeypatch.setattr(driver, "run_batch", lambda vehicles, *_, **__: [diverged] * len(vehicles))
     (failed,) = run_group([tasks[0]])
     assert failed == diverged.named("section s0")
+
+
+def test_few_short_sections_run_in_this_process_by_default(tasks, monkeypatch):
+    from trackdyn import parallel
+    from trackdyn.deterioration import runs
+
+    short = [dataclasses.replace(t, options=t.options.model_copy(update={"total_mgt": 50.0}))
+             for t in tasks]  # fmt: skip
+    assert runs.in_process(short, None, None)  # 3 x 50 MGT: within IN_PROCESS_MGT = 200
+    assert runs.in_process(short, 1, None)
+    assert not runs.in_process(short, 2, None)
+    assert not runs.in_process(short, None, "tcp://10.0.0.5:8786")
+    assert not runs.in_process(short * 2, None, None)  # 6 x 50 MGT: more than 200
+    assert not runs.in_process(short * 3, 1, "tcp://10.0.0.5:8786")  # the scheduler asked for
+    monkeypatch.setattr(runs, "TOGETHER", 2)  # more than a task holds
+    assert not runs.in_process(short, None, None)
+    monkeypatch.setattr(runs, "TOGETHER", 8)
+    token = parallel._shared.set(object())  # in a shared_cluster block: its client takes them
+    try:
+        assert not runs.in_process(short, None, None)
+    finally:
+        parallel._shared.reset(token)
+    assert runs.in_process(short, None, None)

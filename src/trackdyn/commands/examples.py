@@ -51,7 +51,9 @@ EXAMPLES: dict[str, tuple[str, dict[str, str], str]] = {
             "sensitivity.toml": "examples/sensitivity.toml",
             "speed.toml": "examples/speed.toml",
         },
-        "trackdyn study {to}/sensitivity.toml --out study-out",
+        "trackdyn study {to}/matrix-2dof.toml --out matrix-out\n"
+        "trackdyn study {to}/sensitivity.toml --out sensitivity-out\n"
+        "trackdyn study {to}/speed.toml --out speed-out",
     ),
     "interventions": (
         "an interventions study: the example section with tamping, four alternatives, 50 MGT",
@@ -82,7 +84,8 @@ EXAMPLES: dict[str, tuple[str, dict[str, str], str]] = {
         "trackdyn calibrate {to}/calibration.toml --out calibration-out",
     ),
 }
-"""Example name -> (what it is, {file written: file in the package}, how to run it)."""
+"""Example name -> (what it is, {file written: file in the package}, how to run it: a
+command a line, one for each scenario of the example)."""
 
 
 def listing() -> str:

@@ -69,7 +69,8 @@ def step_together(loops: list, progress: bool = False) -> list[LoopRecord | Fail
         is ``done`` (its ``record``); a step that wants no runs is made at once, so that
         each round's batch holds the runs of every section that wants any.
     progress : bool
-        Show a progress bar over the tonnage of a single section.
+        Show a progress bar over the tonnage: the least any section has reached (a
+        section done counts as at its end).
 
     Returns
     -------
@@ -78,8 +79,8 @@ def step_together(loops: list, progress: bool = False) -> list[LoopRecord | Fail
     """
     results: list = [None] * len(loops)
     active = dict(enumerate(loops))
-    alone = progress and len(loops) == 1
-    with progress_bar(alone, loops[0].total if alone else 0.0, "tonnage [MGT]") as bar:
+    total = max((loop.total for loop in loops), default=0.0)
+    with progress_bar(progress, total, "tonnage [MGT]") as bar:
         while active:
             asked = {}
             for i in list(active):
@@ -92,8 +93,8 @@ def step_together(loops: list, progress: bool = False) -> list[LoopRecord | Fail
                 _phase(results, active, i, _step, active[i], reply)
                 if i in active and active[i].done:
                     results[i] = active.pop(i).record()
-            if alone:
-                bar.update(loops[0].mgt)
+            reached = (loop.mgt if i in active else loop.total for i, loop in enumerate(loops))
+            bar.update(min(reached))
     return results
 
 

@@ -102,7 +102,7 @@ def run_section(task: SectionTask):
 def run_group(tasks: list[SectionTask]) -> list:
     """Run the loops of several sections stepped together (`step_together`: their vehicle
     runs share the solver's vector lanes); never raises. Each section's result is what
-    `run_section` gives for it alone; a tonnage progress bar only for a section alone.
+    `run_section` gives for it alone; a tonnage progress bar when every task asks for one.
 
     Parameters
     ----------
@@ -127,7 +127,7 @@ def run_group(tasks: list[SectionTask]) -> list:
             notes[i] = track.geometry.notes
         except Exception as exc:  # noqa: BLE001 - reported with the section, others go on
             results[i] = Failure.of(exc).named(f"section {task.section.name}")
-    progress = len(tasks) == 1 and tasks[0].progress
+    progress = all(t.progress for t in tasks)
     for i, out in zip(loops, step_together(list(loops.values()), progress), strict=True):
         name = tasks[i].section.name
         if isinstance(out, Failure):
@@ -139,10 +139,43 @@ def run_group(tasks: list[SectionTask]) -> list:
     return results
 
 
+IN_PROCESS_MGT = 200.0
+"""Sections times tonnage [MGT] up to which the sections (at most `TOGETHER`, one task) run
+in this process by default, stepped together, rather than on a new local cluster: starting
+one (its processes, trackdyn imported and the compiled loops loaded in each) costs more
+than a second worker saves on them. 4 sections of 500 m through 50 MGT: 5.7 s in this
+process against 9.6 s on 2 workers, the command's whole wall time (benchmarks/command.py,
+2 cores)."""
+
+
+def in_process(tasks: list[SectionTask], workers: int | None, scheduler: str | None) -> bool:
+    """Whether `run_sections` runs ``tasks`` in this process: with ``workers=1`` and no
+    scheduler, or by default (no workers, scheduler or `trackdyn.parallel.shared_cluster`
+    given) when they are few and short (`IN_PROCESS_MGT`).
+
+    Parameters
+    ----------
+    tasks : list of SectionTask
+        The sections.
+    workers : int, optional
+        Worker processes asked for.
+    scheduler : str, optional
+        Address of a running Dask scheduler.
+    """
+    from trackdyn.parallel import sharing
+
+    if scheduler is not None or workers not in (None, 1):
+        return False
+    if workers == 1:
+        return True
+    work = sum(t.options.total_mgt for t in tasks)
+    return not sharing() and len(tasks) <= TOGETHER and work <= IN_PROCESS_MGT
+
+
 def run_sections(tasks, *, workers=None, scheduler=None, progress=False) -> list:
     """Run the tasks through `run_tasks`; the Datasets in task order.
 
-    One section without a scheduler runs in this process unless ``workers`` says
+    Few and short sections (`in_process`) run in this process unless ``workers`` says
     otherwise. A failed section is raised (`Failure.error`), its message naming it
     (nothing is written).
 
@@ -159,7 +192,7 @@ def run_sections(tasks, *, workers=None, scheduler=None, progress=False) -> list
     """
     from trackdyn.parallel import run_tasks
 
-    if workers is None and scheduler is None and len(tasks) == 1:
+    if in_process(tasks, workers, scheduler):
         workers = 1
     results = run_tasks(
         tasks, run_group, workers=workers, scheduler=scheduler, progress=progress,

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from trackdyn.commands.compiling import say_if_compiling
 from trackdyn.commands.staging import Record, output_folder
 from trackdyn.commands.tables import alignment_table, fitted_table, frame_table
 from trackdyn.errors import require_workers
@@ -67,6 +68,7 @@ def calibrate(calibration, out, overwrite: bool, workers, scheduler, console) ->
         output_folder(out, "calibrate", overwrite, record) as stage,
         shared_cluster(workers, scheduler),
     ):
+        say_if_compiling("calibrate", scheduler)
         result = fit(problem, workers=workers, scheduler=scheduler, log=_log)
         record.headline = headline(problem, result)
         table = write_calibration(problem, result, stage, str(source))

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 
+from trackdyn.commands.compiling import say_if_compiling
 from trackdyn.commands.geometry_notes import PREFIX, geometry_notes
 from trackdyn.commands.staging import Record, output_folder
 from trackdyn.commands.tables import deterioration_table, forecast_table, frame_table
@@ -31,7 +32,8 @@ def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> 
     overwrite : bool
         Replace another command's outputs in ``out``.
     workers : int, optional
-        Worker processes (default: one per core, 1 for one section).
+        Worker processes (default: one per core; this process alone for few and short
+        sections, `trackdyn.deterioration.runs.in_process`).
     scheduler : str, optional
         Address of a running Dask scheduler.
     console : rich.console.Console
@@ -40,12 +42,12 @@ def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> 
     from trackdyn.commands.deteriorate.outputs import summary, write_outputs
     from trackdyn.commands.deteriorate.scenario import load_deterioration
     from trackdyn.commands.deteriorate.sections import section_tasks
-    from trackdyn.deterioration.runs import run_sections
+    from trackdyn.deterioration.runs import in_process, run_sections
 
     spec, base = load_deterioration(scenario)
     require_workers(workers)
     tasks = section_tasks(spec, base)
-    serial = scheduler is None and (workers == 1 or (workers is None and len(tasks) == 1))
+    serial = in_process(tasks, workers, scheduler)
     if serial:
         tasks = [dataclasses.replace(t, progress=True) for t in tasks]
     title = f"trackdyn deteriorate: {spec.run.model}, {len(tasks)} section(s)"
@@ -56,6 +58,7 @@ def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> 
 
         plan = plan_forecast(spec, base, tasks)
     with output_folder(out, "deteriorate", overwrite, record) as stage:
+        say_if_compiling("deteriorate", scheduler)
         datasets = run_sections(tasks, workers=workers, scheduler=scheduler, progress=not serial)
         for ds in datasets:
             attrs = ds.attrs.items()

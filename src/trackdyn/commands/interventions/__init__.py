@@ -54,6 +54,7 @@ from pydantic import (
     model_validator,
 )
 
+from trackdyn.commands.compiling import say_if_compiling
 from trackdyn.commands.deteriorate.forecast import plan_forecast
 from trackdyn.commands.deteriorate.outputs import life_cycle_table
 from trackdyn.commands.deteriorate.scenario import DeteriorationScenario, load_deterioration
@@ -402,6 +403,7 @@ def interventions(path, out, overwrite: bool, workers, scheduler, console) -> No
                         {"study": study.model_dump(mode="json"),
                          "scenario": spec.model_dump(mode="json")}, currency=code)  # fmt: skip
         with output_folder(out, "study", overwrite, record) as stage:
+            say_if_compiling("interventions", scheduler)
             datasets = run_alternatives(labelled, workers=workers, scheduler=scheduler,
                                         progress=True)  # fmt: skip
             table, segments = compare(study, [alt for alt, _ in labelled], datasets, rates)

@@ -21,6 +21,7 @@ from pathlib import Path
 
 from rich.text import Text
 
+from trackdyn.commands.compiling import say_if_compiling
 from trackdyn.commands.geometry_notes import geometry_notes
 from trackdyn.commands.netcdf import write_netcdf
 from trackdyn.commands.plots import example_marks, save
@@ -179,6 +180,7 @@ def run(scenario, out, overwrite: bool, console) -> None:
     record = scenario_record(title, scenario, spec, base)
     record.vehicle = vehicle.as_dict()
     with output_folder(out, "run", overwrite, record) as stage:
+        say_if_compiling("run")
         with status("reading the track"):
             trk = spec.track.load(base)
         geometry_notes(trk.geometry.notes, trk.geometry.where, record.options)

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from trackdyn.commands.compiling import say_if_compiling
 from trackdyn.commands.geometry_notes import geometry_notes
 from trackdyn.commands.netcdf import write_netcdf
 from trackdyn.commands.plots import save
@@ -141,6 +142,7 @@ def study(study_file, out, overwrite: bool, workers, scheduler, console) -> None
     record.options.update({"kind": spec.kind, spec.kind: spec.model_dump(mode="json")[spec.kind]})
     geometry_notes(track.geometry.notes, track.geometry.where, record.options)
     with output_folder(out, "study", overwrite, record) as stage:
+        say_if_compiling("study", scheduler)
         results = run_study(runs, workers=workers, scheduler=scheduler, progress=True)
         table, ds = gather(results)
         ds.attrs.update(kind=spec.kind, model=spec.run.model)
