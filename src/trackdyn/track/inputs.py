@@ -189,9 +189,9 @@ class ContactInput:
                 )
         k, r = np.zeros((centre.size, len(self.rails))), np.zeros((centre.size, len(self.rails)))
         knots = lin.track.geometry.distance
-        _sample(
-            centre, self.axles, lin.track.supports.position, lin.k2, lin.ys, knots, self.coef, k, r
-        )
+        # contiguous, so that every caller uses the one compiled specialisation
+        k2, ys = np.ascontiguousarray(lin.k2), np.ascontiguousarray(lin.ys)
+        _sample(centre, self.axles, lin.track.supports.position, k2, ys, knots, self.coef, k, r)
         return k, r
 
     def __call__(self, centre: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
