@@ -11,6 +11,7 @@ from __future__ import annotations
 from contextlib import contextmanager, nullcontext
 
 _settings = {"verbosity": 1}  # 0: quiet, 1: normal, 2: verbose
+_waiting: list[str] = []  # why the next bar's first update will be slow (`expect_wait`)
 
 
 def set_verbosity(level: int) -> None:
@@ -57,18 +58,30 @@ class _Silent:
 
 
 class _Bar:
-    def __init__(self, progress, task):
+    def __init__(self, progress, task, label: str):
         self._progress, self._task, self._updates = progress, task, 0
+        self._label = label
 
     def advance(self, n: float = 1) -> None:
         """Move the bar on by ``n`` units."""
         self._updates += 1
-        self._progress.update(self._task, advance=n, updates=self._updates)
+        self._progress.update(self._task, advance=n, **self._fields())
 
     def update(self, completed: float) -> None:
         """Move the bar to ``completed`` units."""
         self._updates += 1
-        self._progress.update(self._task, completed=completed, updates=self._updates)
+        self._progress.update(self._task, completed=completed, **self._fields())
+
+    def _fields(self) -> dict:
+        """The update count, and from the first update on the label without the wait."""
+        return {"updates": self._updates, "description": self._label}
+
+
+def expect_wait(text: str) -> None:
+    """Show ``text`` with the next progress bar until its first update: why that comes late
+    (e.g. the solver compiling). On a terminal only, like the bar, and gone with the bar, so
+    that a refused input still ends the command with its one line on stderr."""
+    _waiting[:] = [text]
 
 
 @contextmanager
@@ -85,13 +98,14 @@ def progress_bar(show: bool, total: float, label: str):
         Text before the bar, with the unit, e.g. ``"tonnage [MGT]"``.
     """
     console = _stderr() if show and _settings["verbosity"] > 0 else None
+    wait = f"{label}, {_waiting.pop()}" if _waiting else label
     if console is None or not console.is_terminal:
         yield _Silent()
         return
     from rich.progress import Progress
 
     with Progress(*_columns(), transient=True, console=console) as prog:
-        yield _Bar(prog, prog.add_task(label, total=total))
+        yield _Bar(prog, prog.add_task(wait, total=total), label)
 
 
 def status(text: str):

@@ -1,11 +1,10 @@
 """The note of a first run that compiles the solver: when the cache is cold, and only then."""
 
 import ast
+import io
 import os
 import sys
 from pathlib import Path
-
-import pytest
 
 import trackdyn
 from trackdyn.commands import compiling
@@ -61,17 +60,46 @@ def test_note_when_an_index_is_missing_or_older_than_its_source(monkeypatch, tmp
     assert compiling_note("deteriorate") is not None
 
 
-@pytest.mark.parametrize("level, shown", [(0, False), (1, True)])
-def test_the_note_is_on_stderr_unless_quiet(level, shown, monkeypatch, tmp_path, capsys):
-    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+def shown_with_a_bar(monkeypatch, level: int, terminal: bool, scheduler=None) -> str:
+    """What stderr shows of the note said for a study, then a bar of 2 runs moved once."""
+    from rich.console import Console
+
+    from trackdyn import progress
+
+    screen = io.StringIO()
+    console = Console(file=screen, force_terminal=terminal, width=200, color_system=None)
+    monkeypatch.setattr(progress, "_stderr", lambda: console)
     set_verbosity(level)
     try:
-        compiling.say_if_compiling("study")
-        compiling.say_if_compiling("study", scheduler="tcp://10.0.0.5:8786")  # its own cache
+        compiling.say_if_compiling("study", scheduler)
+        with progress.progress_bar(True, 2, "runs") as bar:
+            bar.advance()
     finally:
         set_verbosity(1)
-    out, err = capsys.readouterr()
-    assert out == ""
-    assert err == (
-        "compiling the solver once (about 30 s; cached for later runs)\n" if shown else ""
-    )
+    return screen.getvalue()
+
+
+NOTE = "compiling the solver once (about 30 s; cached for later runs)"
+
+
+def test_the_note_comes_with_the_bar_on_a_terminal_unless_quiet(monkeypatch, tmp_path):
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    assert f"runs, {NOTE}" in shown_with_a_bar(monkeypatch, 1, terminal=True)
+    assert NOTE not in shown_with_a_bar(monkeypatch, 0, terminal=True)  # -q
+    assert shown_with_a_bar(monkeypatch, 1, terminal=False) == ""  # a log: nothing
+    with_scheduler = shown_with_a_bar(monkeypatch, 1, True, scheduler="tcp://10.0.0.5:8786")
+    assert "runs" in with_scheduler and NOTE not in with_scheduler  # its workers' own cache
+
+
+def test_a_refused_input_leaves_one_line_on_a_cold_cache(monkeypatch, tmp_path):
+    # the note waits for the bar, so an input refused before any run is one line on stderr
+    from typer.testing import CliRunner
+
+    from trackdyn.cli import app
+
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.chdir(tmp_path)
+    Path("bad.toml").write_text("[loop]\ntotal_mgt = 0.1\nsegment_length_m = 1e6\n")
+    result = CliRunner().invoke(app, ["deteriorate", "bad.toml", "--out", "out"])
+    assert result.exit_code == 2, result.output
+    assert len(result.stderr.strip().splitlines()) == 1, result.stderr

@@ -72,10 +72,12 @@ def compiling_note(command: str) -> str | None:
 
 
 def say_if_compiling(command: str, scheduler: str | None = None) -> None:
-    """Note on stderr (not under ``-q``) that ``command``'s run will compile its kernels
-    (`compiling_note`); nothing with a ``scheduler``: its workers have their own cache."""
-    from trackdyn.progress import note
+    """Say with the command's progress bar, until it first moves, that ``command``'s run
+    will compile its kernels (`compiling_note`; `trackdyn.progress.expect_wait`: on a
+    terminal, not under ``-q``); nothing with a ``scheduler``: its workers have their own
+    cache."""
+    from trackdyn.progress import expect_wait
 
     text = None if scheduler else compiling_note(command)
     if text:
-        note(text)
+        expect_wait(text)
