@@ -335,6 +335,30 @@ def read_supports(path) -> Supports:
     return supports_of([rail_rows(rows, rail) for rail in RAILS], path)
 
 
+def read_measured_stiffness(path) -> dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """Read a measured track stiffness, ``distance_m,rail,stiffness_kN_per_mm`` at any
+    positions (`trackdyn.track.measured`): per rail, distances [m] (strictly increasing),
+    stiffnesses [N/m] and the file's line of each row."""
+    rows = _support_rows(_read_csv(path, dtype={"rail": "category"}), path)
+    if len(rows.values) != 1:
+        raise TrackdynInputError(
+            f"{path}: supports_kind = 'measured' reads a column stiffness_kN_per_mm, not "
+            "load-deflection curves"
+        )
+    measured = {}
+    for rail in RAILS:
+        r = rail_rows(rows, rail)
+        if r.distance.size == 0:
+            raise TrackdynInputError(f"{path}: no rows for the {rail} rail")
+        bad = np.flatnonzero(np.diff(r.distance) <= 0)
+        if bad.size:
+            raise TrackdynInputError(
+                f"{path}: line {r.line[bad[0] + 1]}: the {rail} rail's distances are not increasing"
+            )
+        measured[rail] = (r.distance, r.values[0], r.line)
+    return measured
+
+
 def support_pieces(path, rows: int = CHUNK_ROWS) -> Iterator[SupportRows]:
     """A supports CSV read ``rows`` rows at a time, each row checked as `read_supports` does."""
     for frame in _read_chunks(path, rows, dtype={"rail": "category"}):

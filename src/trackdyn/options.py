@@ -43,8 +43,8 @@ from trackdyn.errors import TrackdynInputError, unknown
 from trackdyn.io import read_toml
 from trackdyn.limits import MAX_SPEED_KMH
 from trackdyn.strict import Strict
+from trackdyn.track.formats import TrackFormat
 from trackdyn.track.support import DELTA
-from trackdyn.track.survey import GeometryFormat
 from trackdyn.vehicle.parameters import load_vehicle, vehicle_source
 
 
@@ -151,9 +151,9 @@ class VehicleSpec(Strict):
         return load_vehicle(self.source(base), **self.overrides)
 
 
-class TrackSpec(GeometryFormat):
+class TrackSpec(TrackFormat):
     """``[track]``: ``geometry`` and ``supports`` CSV files; neither: the built-in example;
-    and what the geometry file holds (`trackdyn.track.survey.GeometryFormat`)."""
+    and what the geometry file holds (`trackdyn.track.formats.TrackFormat`)."""
 
     geometry: Path | None = None
     supports: Path | None = None
@@ -169,7 +169,7 @@ class TrackSpec(GeometryFormat):
         """The track (`trackdyn.track.track.Track`)."""
         from trackdyn.data import load_track
 
-        return load_track(*self.paths(base), self.geometry_format())
+        return load_track(*self.paths(base), self.track_format())
 
 
 def load_toml(model: type[BaseModel], path=None, default: BaseModel | None = None):

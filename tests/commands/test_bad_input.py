@@ -54,8 +54,58 @@ CALIBRATION = (
     '[[survey]]\ngeometry = "b.csv"\nmgt = 1\n[fit]\nparameters = ["K_s"]\n'
 )
 
+MEASURED = '[track]\ngeometry = "{track}/g.csv"\nsupports = "k.csv"\nsupports_kind = "measured"\n'
+"""A run on a measured stiffness ``k.csv`` along the 300 m section."""
+
 CASES = [
     # (command line, files {name: text}, message fragment)
+    (  # a measured stiffness of 0.1 kN/mm: metres per meganewton taken for kN/mm?
+        ["run", "bad.toml"],
+        {
+            "bad.toml": MEASURED + "stiffness_load_kN = 100\n",
+            "k.csv": "distance_m,rail,stiffness_kN_per_mm\n0,left,80\n300,left,0.1\n"
+            "0,right,80\n300,right,80\n",
+        },
+        "k.csv: line 3: the left rail's stiffness is 0.1 kN/mm, outside the plausible 1 to",
+    ),
+    (
+        ["run", "bad.toml"],
+        {
+            "bad.toml": MEASURED + "stiffness_load_kN = 100\n",
+            "k.csv": "distance_m,rail,stiffness_kN_per_mm\n0,left,80\n300,left,80\n"
+            "0,right,80\n0,right,80\n",
+        },
+        "k.csv: line 5: the right rail's distances are not increasing",
+    ),
+    (
+        ["run", "bad.toml"],
+        {"bad.toml": MEASURED},
+        "supports_kind = 'measured' needs stiffness_load_kN",
+    ),
+    (
+        ["run", "bad.toml"],
+        {
+            "bad.toml": MEASURED + "stiffness_load_kN = 400\n",
+            "k.csv": "distance_m,rail,stiffness_kN_per_mm\n0,left,80\n0,right,80\n",
+        },
+        "stiffness_load_kN = 400 kN is outside the example curve shape's loads (up to 250 kN)",
+    ),
+    (
+        ["run", "bad.toml"],
+        {
+            "bad.toml": '[track]\ngeometry = "{track}/g.csv"\nsupports = "{track}/s.csv"\n'
+            "stiffness_load_kN = 100\n"
+        },
+        "stiffness_load_kN: for supports_kind = 'measured'",
+    ),
+    (
+        ["run", "bad.toml"],
+        {
+            "bad.toml": '[track]\ngeometry = "{track}/g.csv"\nsupports = "{track}/s.csv"\n'
+            'supports_kind = "measured"\nstiffness_load_kN = 100\n'
+        },
+        "s.csv: supports_kind = 'measured' reads a column stiffness_kN_per_mm",
+    ),
     (
         ["deteriorate", "bad.toml"],
         {"bad.toml": '[maintenance]\npolicy = "fixed"\n'},

@@ -16,6 +16,7 @@ from trackdyn.errors import TrackdynInputError
 from trackdyn.io import read_geometry, write_supports
 from trackdyn.options import TrackSpec, parse
 from trackdyn.track.chord import Chord
+from trackdyn.track.formats import TrackFormat
 from trackdyn.track.quality import longitudinal_level
 from trackdyn.track.survey import MAX_GAP_M, GeometryFormat
 from trackdyn.track.synthetic import synthetic_track
@@ -174,7 +175,7 @@ def test_track_keys_are_checked(table, match):
 
 def test_the_example_is_no_versine():
     with pytest.raises(TrackdynInputError, match="the built-in example is a profile"):
-        load_track(None, None, GeometryFormat(geometry_kind="d1"))
+        load_track(None, None, TrackFormat(geometry_kind="d1"))
 
 
 def test_a_run_on_a_d1_file_says_what_is_missing(tmp_path):

@@ -74,6 +74,15 @@ EXAMPLES: dict[str, tuple[str, dict[str, str], str]] = {
         },
         "trackdyn run {to}/survey.toml --out survey-out",
     ),
+    "stiffness": (
+        "a run on a measured track stiffness per rail at 100 kN, every metre (RSMV-like)",
+        {
+            "stiffness.toml": "examples/stiffness/stiffness.toml",
+            "stiffness.csv": "examples/stiffness/stiffness.csv",
+            "geometry.csv": "data/example_geometry.csv",
+        },
+        "trackdyn run {to}/stiffness.toml --out stiffness-out",
+    ),
     "calibration": (
         "a calibration with three synthetic surveys of a 200 m section",
         {

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import os
 from importlib.resources import files
 from pathlib import Path
@@ -9,8 +10,10 @@ from pathlib import Path
 import numpy as np
 
 from trackdyn.errors import TrackdynInputError
-from trackdyn.io import read_geometry, read_supports
-from trackdyn.track.survey import GeometryFormat
+from trackdyn.io import read_geometry, read_measured_stiffness, read_supports
+from trackdyn.track.formats import TrackFormat
+from trackdyn.track.measured import measured_supports
+from trackdyn.track.support import SupportCurve
 from trackdyn.track.track import Track
 
 EXAMPLE_GEOMETRY = "example_geometry.csv"
@@ -24,7 +27,7 @@ def example_path(name: str) -> Path:
     return Path(str(files(__name__).joinpath(name)))
 
 
-def load_track(geometry=None, supports=None, geometry_format=None) -> Track:
+def load_track(geometry=None, supports=None, track_format=None) -> Track:
     """Read a track from CSV files; with neither given, the built-in example section.
 
     Parameters
@@ -34,8 +37,9 @@ def load_track(geometry=None, supports=None, geometry_format=None) -> Track:
     supports : path, optional
         Supports CSV, ``distance_m,rail,load_kN,deflection_mm`` or
         ``distance_m,rail,stiffness_kN_per_mm``.
-    geometry_format : GeometryFormat, optional
-        What the geometry file holds (`trackdyn.track.survey`); default a profile.
+    track_format : TrackFormat, optional
+        What the geometry and the supports files hold (`trackdyn.track.formats`); default
+        a profile and per-sleeper curves.
     """
     for name, value in (("geometry", geometry), ("supports", supports)):
         if value is not None and not isinstance(value, str | os.PathLike):
@@ -47,15 +51,34 @@ def load_track(geometry=None, supports=None, geometry_format=None) -> Track:
             "give both a geometry and a supports file, or neither for the built-in example"
         )
     if geometry is None:
-        if geometry_format not in (None, GeometryFormat()):
+        if track_format not in (None, TrackFormat()):
             raise TrackdynInputError(
-                "geometry_kind, chord, max_gap_m and profile_sign describe a geometry file; "
-                "the built-in example is a profile"
+                "the [track] keys of geometry_kind, chord, max_gap_m, profile_sign and "
+                "supports_kind describe files; the built-in example is a profile with "
+                "per-sleeper curves"
             )
         geometry, supports = example_path(EXAMPLE_GEOMETRY), example_path(EXAMPLE_SUPPORTS)
-    track = Track(read_geometry(geometry, geometry_format), read_supports(supports))
+    fmt = TrackFormat() if track_format is None else track_format
+    profile = read_geometry(geometry, fmt)
+    if fmt.supports_kind == "measured":
+        span = (float(profile.distance[0]), float(profile.distance[-1]))
+        measured = read_measured_stiffness(supports)
+        return Track(profile, measured_supports(measured, fmt, span, example_shape(), supports))
+    track = Track(profile, read_supports(supports))
     check_coverage(track, supports)
     return track
+
+
+@functools.cache
+def example_shape() -> SupportCurve:
+    """The built-in example's median support curve: at each of its load points, the median
+    deflection of its 3334 curves (both rails; they share the load points), the shape
+    given to supports made of a measured stiffness (`trackdyn.track.measured`)."""
+    example = read_supports(example_path(EXAMPLE_SUPPORTS))
+    curves = [example.left, example.right]
+    load = curves[0].load[: curves[0].start[1]]
+    deflection = np.concatenate([c.deflection.reshape(-1, load.size) for c in curves])
+    return SupportCurve(load, np.median(deflection, axis=0), "the example's median curve")
 
 
 def check_coverage(track: Track, supports) -> None:

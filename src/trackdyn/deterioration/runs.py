@@ -19,7 +19,9 @@ from trackdyn.deterioration.results import make_dataset
 from trackdyn.deterioration.settlement import SettlementLaw
 from trackdyn.deterioration.zones import check_zones
 from trackdyn.errors import Failure
-from trackdyn.track.survey import NOTE_PREFIX, GeometryFormat
+from trackdyn.track.formats import TrackFormat
+from trackdyn.track.survey import NOTE_PREFIX
+from trackdyn.track.track import Track
 
 
 @dataclass(frozen=True)
@@ -34,15 +36,20 @@ class Section:
         CSV files; None for both: the built-in example.
     zones : str, optional
         Zone table (`trackdyn.deterioration.zones`); None: all open track.
-    geometry_format : GeometryFormat, optional
-        What the geometry file holds (`trackdyn.track.survey`); None: a profile.
+    track_format : TrackFormat, optional
+        What the geometry and supports files hold (`trackdyn.track.formats`); None: a
+        profile and per-sleeper curves.
     """
 
     name: str
     geometry: str | None = None
     supports: str | None = None
     zones: str | None = None
-    geometry_format: GeometryFormat | None = None
+    track_format: TrackFormat | None = None
+
+    def track(self) -> Track:
+        """The section's track, read from its files (`trackdyn.data.load_track`)."""
+        return load_track(self.geometry, self.supports, self.track_format)
 
 
 @dataclass(frozen=True)
@@ -120,7 +127,7 @@ def run_group(tasks: list[SectionTask]) -> list:
     for i, task in enumerate(tasks):
         try:
             sec = task.section
-            track = load_track(sec.geometry, sec.supports, sec.geometry_format)
+            track = sec.track()
             position = track.supports.position
             check_zones(task.zones, (position[0], position[-1]), task.section.zones or "zones")
             loops[i] = SectionLoop(track, task.traffic, task.law, task.options, zones=task.zones)

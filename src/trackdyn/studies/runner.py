@@ -21,7 +21,7 @@ from scipy import signal
 
 from trackdyn.errors import Failure
 from trackdyn.options import RunOptions
-from trackdyn.track.survey import GeometryFormat
+from trackdyn.track.formats import TrackFormat
 from trackdyn.units import name_unit
 
 SPECTRUM_FREQUENCY = np.arange(0.0, 40.0 + 1e-9, 0.125)
@@ -33,14 +33,14 @@ class TrackRef:
     """Where a worker finds the track: CSV paths, or None for the built-in example.
 
     ``case`` names a §5.4.1 excitation case applied after linearisation (see
-    `trackdyn.track.excitation`); ``"iv"`` is the track as measured. ``geometry_format``
+    `trackdyn.track.excitation`); ``"iv"`` is the track as measured. ``track_format``
     says what the geometry file holds (`trackdyn.track.survey`; None: a profile).
     """
 
     geometry: str | None = None
     supports: str | None = None
     case: str = "iv"
-    geometry_format: GeometryFormat | None = None
+    track_format: TrackFormat | None = None
 
 
 @dataclass(frozen=True)
@@ -76,17 +76,17 @@ Result = tuple[dict, Statistics | Failure]
 
 
 @functools.lru_cache(maxsize=8)
-def _track(geometry, supports, geometry_format):
+def _track(geometry, supports, track_format):
     from trackdyn.data import load_track
 
-    return load_track(geometry, supports, geometry_format)
+    return load_track(geometry, supports, track_format)
 
 
 @functools.lru_cache(maxsize=32)
 def _linearised(ref: TrackRef, static_load: float, delta: float, extrapolate: bool):
     from trackdyn.track.excitation import excitation_case
 
-    track = _track(ref.geometry, ref.supports, ref.geometry_format)
+    track = _track(ref.geometry, ref.supports, ref.track_format)
     lin = track.linearise(static_load, delta, extrapolate=extrapolate)
     return excitation_case(lin, ref.case)
 

@@ -91,12 +91,12 @@ def _scaled(source: str, overrides: dict, factors: dict) -> dict:
 def tasks(study: Study, base: Path) -> list[Task]:
     """Expand a study into its independent runs."""
     geometry, supports = (None if p is None else str(p) for p in study.track.paths(base))
-    form = study.track.geometry_format()
+    form = study.track.track_format()
     template = Task(
         labels={},
         vehicle=str(study.vehicle.source(base)),
         overrides=dict(study.vehicle.overrides),
-        track=TrackRef(geometry, supports, geometry_format=form),
+        track=TrackRef(geometry, supports, track_format=form),
         run=study.run,
     )
     if study.kind == "matrix":
@@ -110,7 +110,7 @@ def tasks(study: Study, base: Path) -> list[Task]:
                     template,
                     vehicle=source,
                     overrides=_scaled(source, template.overrides, factors),
-                    track=TrackRef(geometry, supports, case=case, geometry_format=form),
+                    track=TrackRef(geometry, supports, case=case, track_format=form),
                     labels={"vehicle": Path(name).stem, "damping": damping, "case": case},
                 )
             )

@@ -99,10 +99,6 @@ class GeometryFormat(Strict):
                              "chord_front_m")  # fmt: skip
         return self
 
-    def geometry_format(self) -> GeometryFormat:
-        """These keys alone (of a ``[track]`` table that holds more)."""
-        return GeometryFormat(**{k: getattr(self, k) for k in GeometryFormat.model_fields})
-
     def chord(self) -> Chord:
         """The versine's chord, in the direction the car ran."""
         if self.chord_m is not None:

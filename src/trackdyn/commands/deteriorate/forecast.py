@@ -15,7 +15,6 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from trackdyn.data import load_track
 from trackdyn.deterioration.ballast import read_field_draws
 from trackdyn.errors import TrackdynInputError
 from trackdyn.forecast.ensemble import run_ensemble
@@ -73,7 +72,7 @@ def _field_draws(path, tasks):
                                  f"draws belong to one section, the scenario has "
                                  f"{len(tasks)}")  # fmt: skip
     section = tasks[0].section
-    return read_field_draws(path, load_track(section.geometry, section.supports)
+    return read_field_draws(path, section.track()
                             .supports.position)  # fmt: skip
 
 

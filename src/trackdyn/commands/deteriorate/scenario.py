@@ -102,7 +102,7 @@ from trackdyn.deterioration.options import LoopOptions
 from trackdyn.errors import TrackdynInputError
 from trackdyn.limits import MAX_SPEED_KMH, MAX_TOTAL_MGT
 from trackdyn.options import RunOptions, Strict, load_toml, vehicle_source
-from trackdyn.track.survey import GeometryFormat
+from trackdyn.track.formats import TrackFormat
 
 
 def _default(name: str):
@@ -167,12 +167,12 @@ class SettlementSpec(Strict):
         return value
 
 
-class TrackSectionsSpec(GeometryFormat):
+class TrackSectionsSpec(TrackFormat):
     """``[track]``: ``geometry`` and ``supports`` CSV files, or a ``sections`` CSV list;
     ``zones``, a zone table (`trackdyn.deterioration.zones`; in a sections list, its
     ``zones`` column); ``rail`` section for the bending stiffness EI; ``start``, ``"tamped"``, ``"as
     measured"`` or ``"as surveyed"`` (default: tamped for the built-in example, as
-    measured for files); what the geometry files hold (`trackdyn.track.survey.GeometryFormat`,
+    measured for files); what the geometry files hold (`trackdyn.track.formats.TrackFormat`,
     the same for every section of a list)."""
 
     geometry: Path | None = None

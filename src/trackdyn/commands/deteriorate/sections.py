@@ -23,7 +23,6 @@ from trackdyn.data import (
     EXAMPLE_SUPPORTS,
     EXAMPLE_ZONES,
     example_path,
-    load_track,
 )
 from trackdyn.deterioration.ballast import read_rate_field
 from trackdyn.deterioration.law_files import load_law
@@ -32,14 +31,14 @@ from trackdyn.deterioration.zones import read_zones
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import read_table
 from trackdyn.provenance import note_read
-from trackdyn.track.survey import GeometryFormat
+from trackdyn.track.formats import TrackFormat
 
 NAME = re.compile(r"^[A-Za-z0-9_.-]*[A-Za-z0-9][A-Za-z0-9_.-]*$")
 """Section names become parts of file names: letters, digits, ``_``, ``-`` and ``.``, with
 at least one letter or digit (not ``..``)."""
 
 
-def read_sections(path, geometry_format: GeometryFormat | None = None) -> list[Section]:
+def read_sections(path, track_format: TrackFormat | None = None) -> list[Section]:
     """Read a sections CSV (``name,geometry,supports[,zones]``, paths relative to the CSV
     file; an empty ``zones`` cell: all open track).
 
@@ -47,7 +46,7 @@ def read_sections(path, geometry_format: GeometryFormat | None = None) -> list[S
     ----------
     path : path
         The CSV file.
-    geometry_format : GeometryFormat, optional
+    track_format : TrackFormat, optional
         What every section's geometry file holds; None: a profile.
     """
     path = Path(path)
@@ -73,7 +72,7 @@ def read_sections(path, geometry_format: GeometryFormat | None = None) -> list[S
                 raise TrackdynInputError(f"{line}: {key} file {value!r} not found")
             files.append(str(file.resolve()))
         geometry, supports, zones = files
-        sections.append(Section(name, geometry, supports, zones, geometry_format))
+        sections.append(Section(name, geometry, supports, zones, track_format))
     return sections
 
 
@@ -90,7 +89,7 @@ def sections_of(spec, base: Path) -> list[Section]:
     """
     t = spec.track
     if t.sections is not None:
-        return read_sections(base / t.sections, t.geometry_format())
+        return read_sections(base / t.sections, t.track_format())
     zones = None
     if t.zones is not None:
         if not (base / t.zones).is_file():
@@ -104,7 +103,7 @@ def sections_of(spec, base: Path) -> list[Section]:
             raise TrackdynInputError(f"track.{key}: {file}: no such file")
     name = re.sub(r"[^A-Za-z0-9_.-]", "_", files[0].stem)
     geometry, supports = (str(f.resolve()) for f in files)
-    return [Section(name, geometry, supports, zones, t.geometry_format())]
+    return [Section(name, geometry, supports, zones, t.track_format())]
 
 
 def section_tasks(spec, base: Path, progress: bool = False) -> list[SectionTask]:
@@ -130,7 +129,7 @@ def section_tasks(spec, base: Path, progress: bool = False) -> list[SectionTask]
         o = loop_options(spec, (spec.settlement.seed, i), sec.geometry is None, base)
         if s.rate_field is None:
             return o
-        position = load_track(sec.geometry, sec.supports).supports.position
+        position = sec.track().supports.position
         factor = read_rate_field(base / s.rate_field, position)
         return o.model_copy(update={"rate_factor": tuple(map(tuple, factor.tolist()))})
 

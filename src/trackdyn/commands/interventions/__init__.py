@@ -65,7 +65,7 @@ from trackdyn.commands.netcdf import write_netcdf
 from trackdyn.commands.plots import save
 from trackdyn.commands.staging import Record, output_folder
 from trackdyn.commands.tables import frame_table
-from trackdyn.data import EXAMPLE_GEOMETRY, EXAMPLE_SUPPORTS, example_path, load_track
+from trackdyn.data import EXAMPLE_GEOMETRY, EXAMPLE_SUPPORTS, example_path
 from trackdyn.deterioration.runs import Section
 from trackdyn.errors import TrackdynInputError, named, require_workers
 from trackdyn.options import Strict, load_toml, parse
@@ -224,7 +224,7 @@ def _settlement_scaled(options, sec: Section, alt: Alternative):
     mine = [s for s in alt.settlement_scale if s.section in (None, sec.name)]
     if not mine:
         return options
-    position = load_track(sec.geometry, sec.supports).supports.position
+    position = sec.track().supports.position
     _check_inside("settlement_scale", mine, sec, (float(position[0]), float(position[-1])))
     factor = np.ones(position.size)
     for s in mine:

@@ -84,7 +84,7 @@ def scenario_record(title: str, scenario, spec, base: Path, role: str = "scenari
     source = spec.vehicle.source(base)
     inputs["vehicle"] = vehicle_file(source)
     options = {f"run_{k}": v for k, v in spec.run.model_dump().items()}
-    given = spec.track.geometry_format().model_dump(exclude_defaults=True)
+    given = spec.track.track_format().model_dump(exclude_defaults=True)
     options.update({f"track_{k}": v for k, v in given.items()})
     options["vehicle_source"] = str(source)
     options.update({f"vehicle_override_{k}": v for k, v in spec.vehicle.overrides.items()})
