@@ -100,7 +100,7 @@ PHASES = {
     "outputs (write_outputs)": ("outputs.py", "write_outputs"),
     "  of which netCDF": ("netcdf.py", "write_netcdf"),
     "  of which figures drawn (plot_*)": ("deteriorate/plots.py", "plot_"),
-    "  of which figures saved (PNG)": ("commands/plots.py", "save"),
+    "  of which figures saved (PNG)": ("plots/__init__.py", "save"),
 }
 """Phases of the command's profile: (end of the file name, the function's name, or the start
 of the names of several when it ends in ``_``)."""

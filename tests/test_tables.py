@@ -75,7 +75,7 @@ def test_study_table_keeps_each_run_and_its_failure():
 
 
 def test_figure_envelope_keeps_every_peak():
-    from trackdyn.commands.plots import envelope
+    from trackdyn.plots import envelope
 
     # 60 000 samples of a 1 kHz run thinned for a full-length panel: the extremes of every
     # stretch of 30 samples survive, so no peak of the wheel load disappears from the plot

@@ -8,6 +8,7 @@ command runs, so ``trackdyn --version`` and ``--help`` answer at once.
 from __future__ import annotations
 
 import functools
+import os
 import sys
 from pathlib import Path
 from typing import Annotated
@@ -133,6 +134,7 @@ def main(
     """
     from trackdyn.progress import set_verbosity
 
+    os.environ["MPLBACKEND"] = "Agg"  # figures into files: no window, no screen needed
     set_verbosity(0 if quiet else 2 if verbose else 1)
     if ctx.invoked_subcommand is None:
         print(ctx.get_help())

@@ -10,8 +10,9 @@ from typer.testing import CliRunner
 
 from trackdyn.cli import app
 from trackdyn.commands.netcdf import read_netcdf
-from trackdyn.commands.tables import deterioration_table, frame_table, header
+from trackdyn.commands.tables import deterioration_table, frame_table
 from trackdyn.io import write_geometry, write_supports
+from trackdyn.labels import header
 from trackdyn.track.synthetic import synthetic_track
 from trackdyn.vehicle.parameters import load_vehicle
 

@@ -5,7 +5,8 @@ import pandas as pd
 import pytest
 from rich.console import Console
 
-from trackdyn.commands.tables import MISSING, cell, frame_table, header
+from trackdyn.commands.tables import MISSING, cell, frame_table
+from trackdyn.labels import header
 
 # The columns of interventions_compared.csv, values of the kind the example gives (four
 # alternatives of a 1 km section over 50 MGT; costs in the user's currency per metre times

@@ -8,8 +8,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from trackdyn.commands.plots import finished, panels
-from trackdyn.commands.study.plots import plot_speed_sweep, plot_study_matrix
+from trackdyn.plots import finished, panels
+from trackdyn.plots.study import plot_speed_sweep, plot_study_matrix
 
 
 def png(fig) -> bytes:

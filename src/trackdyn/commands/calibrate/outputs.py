@@ -11,10 +11,10 @@ import pandas as pd
 from trackdyn.calibration.fit import FitResult
 from trackdyn.calibration.problem import Calibration
 from trackdyn.calibration.surveys import d1_change
-from trackdyn.commands.calibrate.plots import plot_calibration, plot_field
-from trackdyn.commands.plots import save
 from trackdyn.deterioration.law_files import law_file_table, law_table_toml, law_units
 from trackdyn.forecast.spread import posterior_toml
+from trackdyn.plots import save
+from trackdyn.plots.calibrate import plot_calibration, plot_field
 from trackdyn.track.quality import segment_sd
 from trackdyn.track.track import RAILS
 from trackdyn.units import si_factor

@@ -3,7 +3,7 @@
 The scenario file (`trackdyn.commands.deteriorate.scenario`), the sections list
 (`trackdyn.commands.deteriorate.sections`), the output files
 (`trackdyn.commands.deteriorate.outputs`) and figures
-(`trackdyn.commands.deteriorate.plots`); the runs are `trackdyn.deterioration.runs`.
+(`trackdyn.plots.deteriorate`); the runs are `trackdyn.deterioration.runs`.
 """
 
 from __future__ import annotations

@@ -177,8 +177,8 @@ def write_forecast(forecast: Forecast, names, folder) -> tuple[list[str], pd.Dat
     table : pandas.DataFrame
         ``forecast.csv``'s table.
     """
-    from trackdyn.commands.deteriorate.plots import plot_fan, plot_reach_probability
-    from trackdyn.commands.plots import save
+    from trackdyn.plots import save
+    from trackdyn.plots.deteriorate import plot_fan, plot_reach_probability
 
     table, probability = tables(forecast, names)
     table.to_csv(folder / "forecast.csv", index=False, float_format="%.6g")

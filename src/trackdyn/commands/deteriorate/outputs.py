@@ -5,16 +5,16 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from trackdyn.commands.deteriorate.plots import (
+from trackdyn.commands.netcdf import write_netcdf
+from trackdyn.deterioration.results import vehicle_shares
+from trackdyn.plots import save
+from trackdyn.plots.deteriorate import (
     plot_geometry_evolution,
     plot_line,
     plot_quality_evolution,
     plot_settlement_map,
     plot_straight_line,
 )
-from trackdyn.commands.netcdf import write_netcdf
-from trackdyn.commands.plots import save
-from trackdyn.deterioration.results import vehicle_shares
 
 
 def _shares(ds) -> pd.DataFrame:

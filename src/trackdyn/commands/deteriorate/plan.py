@@ -161,8 +161,8 @@ def write_plan(spec, result, folder) -> tuple[list[str], pd.DataFrame]:
     """Write the plan's files into ``folder`` (the module docstring); their names, and
     what the plan's cap deferred (``plan_deferred.csv``'s table)."""
     from trackdyn.commands.deteriorate.outputs import interventions_table, life_cycle_table
-    from trackdyn.commands.deteriorate.plots import plot_plan
-    from trackdyn.commands.plots import save
+    from trackdyn.plots import save
+    from trackdyn.plots.deteriorate import plot_plan
 
     plan, lines, followed, rules = result
     table, deferred = plan_tables(plan, lines, followed, rules, spec.plan.currency)

@@ -59,16 +59,16 @@ from trackdyn.commands.deteriorate.forecast import plan_forecast
 from trackdyn.commands.deteriorate.outputs import life_cycle_table
 from trackdyn.commands.deteriorate.scenario import DeteriorationScenario, load_deterioration
 from trackdyn.commands.deteriorate.sections import NAME, section_tasks
-from trackdyn.commands.interventions.plots import plot_comparison
 from trackdyn.commands.interventions.spread import cost_spread, member_labelled
 from trackdyn.commands.netcdf import write_netcdf
-from trackdyn.commands.plots import save
 from trackdyn.commands.staging import Record, output_folder
 from trackdyn.commands.tables import frame_table
 from trackdyn.data import EXAMPLE_GEOMETRY, EXAMPLE_SUPPORTS, example_path
 from trackdyn.deterioration.runs import Section
 from trackdyn.errors import TrackdynInputError, named, require_workers
 from trackdyn.options import Strict, load_toml, parse
+from trackdyn.plots import save
+from trackdyn.plots.interventions import plot_comparison
 from trackdyn.progress import note
 from trackdyn.studies.interventions import (
     Scale,

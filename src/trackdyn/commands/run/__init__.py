@@ -24,17 +24,17 @@ from rich.text import Text
 from trackdyn.commands.compiling import say_if_compiling
 from trackdyn.commands.geometry_notes import geometry_notes
 from trackdyn.commands.netcdf import write_netcdf
-from trackdyn.commands.plots import example_marks, save
-from trackdyn.commands.run.plots import (
+from trackdyn.commands.staging import Record, output_folder
+from trackdyn.commands.tables import frame_table
+from trackdyn.errors import named
+from trackdyn.options import RunOptions, Strict, TrackSpec, VehicleSpec, load_toml
+from trackdyn.plots import example_marks, save
+from trackdyn.plots.run import (
     plot_secondary,
     plot_wedge_friction,
     plot_wheel_load_exceedance,
     plot_wheel_loads,
 )
-from trackdyn.commands.staging import Record, output_folder
-from trackdyn.commands.tables import frame_table
-from trackdyn.errors import named
-from trackdyn.options import RunOptions, Strict, TrackSpec, VehicleSpec, load_toml
 from trackdyn.progress import note, status
 from trackdyn.provenance import recorded
 

@@ -9,19 +9,19 @@ import numpy as np
 from trackdyn.commands.compiling import say_if_compiling
 from trackdyn.commands.geometry_notes import geometry_notes
 from trackdyn.commands.netcdf import write_netcdf
-from trackdyn.commands.plots import save
 from trackdyn.commands.run import scenario_record
 from trackdyn.commands.staging import output_folder
-from trackdyn.commands.study.plots import (
+from trackdyn.commands.tables import frame_table
+from trackdyn.errors import TrackdynInputError, named
+from trackdyn.io import read_toml
+from trackdyn.options import RunOptions, load_toml
+from trackdyn.plots import save
+from trackdyn.plots.study import (
     plot_spectra,
     plot_speed_sweep,
     plot_study_matrix,
     plot_tornado,
 )
-from trackdyn.commands.tables import frame_table
-from trackdyn.errors import TrackdynInputError, named
-from trackdyn.io import read_toml
-from trackdyn.options import RunOptions, load_toml
 from trackdyn.progress import note
 from trackdyn.provenance import recorded
 from trackdyn.studies.scenarios import Study

@@ -24,14 +24,8 @@ import numpy as np
 import xarray as xr
 
 from trackdyn.commands.netcdf import write_netcdf
-from trackdyn.commands.plots import example_marks, save
 from trackdyn.commands.staging import Record, output_folder
 from trackdyn.commands.tables import frame_table
-from trackdyn.commands.track.plots import (
-    plot_deflection_basin,
-    plot_load_deflection,
-    plot_track_overview,
-)
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import (
     CHUNK_ROWS,
@@ -43,6 +37,12 @@ from trackdyn.io import (
     supports_of,
 )
 from trackdyn.limits import WHEEL_LOAD, check_within
+from trackdyn.plots import example_marks, save
+from trackdyn.plots.track import (
+    plot_deflection_basin,
+    plot_load_deflection,
+    plot_track_overview,
+)
 from trackdyn.progress import note, status
 from trackdyn.provenance import recorded
 from trackdyn.track.analysis import (
@@ -301,7 +301,7 @@ def write_track_outputs(ds: xr.Dataset, picks, basin, folder, marks=()) -> None:
         Result of `trackdyn.track.analysis.voided_basin`.
     folder : Path
         Output folder.
-    marks : sequence of trackdyn.commands.plots.Mark
+    marks : sequence of trackdyn.plots.Mark
         Stretches of track to mark on the overview (the example's features).
     """
     from trackdyn.deterioration.loop import LoopOptions

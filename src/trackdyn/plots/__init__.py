@@ -1,22 +1,22 @@
-"""What the figures of every command share (matplotlib, no screen needed): colours, the
-marks of a track's features, the axes a plotting function draws on, and saving.
+"""The figures of runs, studies, tracks, deteriorations and calibrations (matplotlib), and
+what they share: colours, the marks of a track's features, the axes a plotting function
+draws on, and saving.
 
-Each command's figures are in its own ``plots`` module (`trackdyn.commands.run.plots`,
-...). Each public ``plot_*`` function there takes the data first and ``ax=None``: it draws
-on the caller's axes when given, else on a new figure, and returns the figure (a new
-figure laid out, ready for `save`).
+Each command's figures are in a module of this package (`trackdyn.plots.run`,
+`trackdyn.plots.deteriorate`, ...), public: a script or a notebook draws them from the
+results as the commands do (the commands draw on matplotlib's ``Agg`` backend, no screen
+needed; `trackdyn.cli` sets it). Each public ``plot_*`` function takes the data first and
+``ax=None``: it draws on the caller's axes when given, else on a new figure, and returns
+the figure (a new figure laid out, ready for `save`).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.figure import Figure
 
 RAIL_COLOURS = {"left": "tab:blue", "right": "tab:red"}
 TAB10 = tuple(f"C{i}" for i in range(10))  # matplotlib's default cycle: tab10

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from trackdyn.commands.plots import TAB10, Figure, finished, panels, plt
+from trackdyn.plots import TAB10, Figure, finished, panels, plt
 from trackdyn.units import money_name
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.colors import to_rgb
 
-from trackdyn.commands.plots import (
+from trackdyn.plots import (
     RAIL_COLOURS,
     TAB10,
     Figure,
@@ -91,8 +91,8 @@ def plot_wheel_loads(ds, ax=None, *, delta: float = 0.3, marks=()) -> Figure:
         input, stiffness) x 2 columns (whole track, zoom); default: a new figure.
     delta : float
         Dynamic wheel load increment δ of the linearisation [-].
-    marks : sequence of trackdyn.commands.plots.Mark
-        Stretches of track to mark (`trackdyn.commands.plots.feature_marks`).
+    marks : sequence of trackdyn.plots.Mark
+        Stretches of track to mark (`trackdyn.plots.feature_marks`).
     """
     contacts = list(ds.contact.values)
     front = ds.contact_offset.values >= 0
@@ -223,8 +223,8 @@ def plot_secondary(ds, ax=None, *, marks=()) -> Figure:
     ax : array of matplotlib Axes, optional
         Where to draw: rows (front bogie, back bogie where there are both) x 2 columns
         (whole track, zoom); default: a new figure.
-    marks : sequence of trackdyn.commands.plots.Mark
-        Stretches of track to mark (`trackdyn.commands.plots.feature_marks`).
+    marks : sequence of trackdyn.plots.Mark
+        Stretches of track to mark (`trackdyn.plots.feature_marks`).
     """
     offsets = {str(s): _suspension_offset(ds, s) for s in ds.suspension.values}
     groups = {

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from trackdyn.commands.plots import RAIL_COLOURS, Figure, finished, panels, plt
+from trackdyn.plots import RAIL_COLOURS, Figure, finished, panels, plt
 
 STYLES: dict[str, dict[str, Any]] = {
     "measured": {"color": "k", "lw": 0.8},

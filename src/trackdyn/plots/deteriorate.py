@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from trackdyn.commands.plots import RAIL_COLOURS, Figure, finished, panels, plt
+from trackdyn.plots import RAIL_COLOURS, Figure, finished, panels, plt
 
 VOID_SHOWN = 1e-3
 """Gap at rest above which the straight-line diagram marks a sleeper as hanging [m]: the

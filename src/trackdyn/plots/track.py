@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from trackdyn.commands.plots import (
+from trackdyn.plots import (
     RAIL_COLOURS,
     TAB10,
     Figure,
@@ -26,7 +26,7 @@ def plot_track_overview(ds, ax=None, *, marks=(), threshold_sd_mm: float | None 
         Result of `trackdyn.track.analysis.track_dataset`.
     ax : array of 5 matplotlib Axes, optional
         Where to draw, top to bottom; default: a new figure.
-    marks : sequence of trackdyn.commands.plots.Mark
+    marks : sequence of trackdyn.plots.Mark
         Stretches to mark (`feature_marks`).
     threshold_sd_mm : float, optional
         D1 SD maintenance threshold to draw [mm].

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from trackdyn.commands.plots import TAB10, Figure, finished, legend_outside, panels, plt
+from trackdyn.plots import TAB10, Figure, finished, legend_outside, panels, plt
 
 
 def plot_study_matrix(table, ax=None, *, context: str = "") -> Figure:
@@ -69,7 +69,7 @@ def plot_tornado(table, ax=None, *, column: str = "dyn_load_sd_kN", context: str
     column : str
         The statistic, a column of the table with its unit suffix.
     """
-    from trackdyn.commands.tables import NOTES, header
+    from trackdyn.labels import NOTES, header
 
     ok = table[table["error"] == ""]
     base = float(ok.loc[ok["parameter"] == "baseline", column].iloc[0])
