@@ -2,7 +2,9 @@
 
 The main calls: `load_vehicle` (a parameter set), `load_track` (a track from CSV files,
 or the built-in example) and `simulate` (a vehicle model over the track, with
-`RunOptions`). They are imported on first use, so the command line starts quickly.
+`RunOptions`); and the scenario objects `Run`, `Deterioration` and `Calibration`
+(`trackdyn.api`: a scenario's inputs, ``.solve()``, ``.summary()``, ``.plot()``). They are
+imported on first use, so the command line starts quickly.
 """
 
 import os
@@ -34,6 +36,9 @@ except PackageNotFoundError:  # running from a source tree that is not installed
     __version__ = "0+unknown"
 
 _API = {
+    "Calibration": "trackdyn.api",
+    "Deterioration": "trackdyn.api",
+    "Run": "trackdyn.api",
     "RunOptions": "trackdyn.options",
     "load_track": "trackdyn.data",
     "load_vehicle": "trackdyn.vehicle.parameters",

@@ -254,6 +254,26 @@ def parameter_file(problem: Calibration, result: FitResult, where: str) -> str:
     return header + law_table_toml(s.law, entries, table.get("description"))
 
 
+def calibration_figures(problem: Calibration, result: FitResult, table=None) -> dict:
+    """A calibration's figures by file name: the fit against the surveys and, with the rate
+    field estimated, the field (`trackdyn.plots.calibrate`).
+
+    Parameters
+    ----------
+    problem : Calibration
+        The calibration.
+    result : FitResult
+        The fit.
+    table : pandas.DataFrame, optional
+        Its `segment_table` (made when not given).
+    """
+    table = segment_table(problem, result) if table is None else table
+    figures = {FILES[3]: plot_calibration(result, problem=problem, table=table)}
+    if result.field is not None:
+        figures[FIELD_FILES[1]] = plot_field(result.field, extent=problem.fitted_extent)
+    return figures
+
+
 def write_calibration(problem: Calibration, result: FitResult, folder, where: str) -> pd.DataFrame:
     """Write `files_of` the result into ``folder``; returns the segment table.
 
@@ -273,11 +293,10 @@ def write_calibration(problem: Calibration, result: FitResult, folder, where: st
     fit_table(problem, result).to_csv(folder / FILES[1], index=False, float_format="%.6g")
     table = segment_table(problem, result)
     table.to_csv(folder / FILES[2], index=False, float_format="%.4g")
-    save(plot_calibration(result, problem=problem, table=table), folder / FILES[3])
+    for name, fig in calibration_figures(problem, result, table).items():
+        save(fig, folder / name)
     if result.field is not None:
         field_table(result).to_csv(folder / FIELD_FILES[0], index=False, float_format="%.6g")
-        fig = plot_field(result.field, extent=problem.fitted_extent)
-        save(fig, folder / FIELD_FILES[1])
         draws_table(result).to_csv(folder / FIELD_FILES[2], index=False, float_format="%.6g")
     if _sampleable(result):
         text = posterior_toml(result.posterior, problem.spec.settlement.law, f"fitted by {where}")

@@ -207,6 +207,36 @@ def _line_title(datasets) -> str:
             f"{length / 1e3:.2f} km, {mgt:g} MGT")  # fmt: skip
 
 
+def section_figures(ds) -> dict:
+    """A section's figures by file name: ``<name>_geometry.png``, ``<name>_quality.png``,
+    ``<name>_settlement_map.png``, ``<name>_straight_line.png`` (`trackdyn.plots.deteriorate`).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A section's prediction, with its ``section`` and ``traffic`` attributes.
+    """
+    name = ds.attrs["section"]
+    title = f"{name}: {ds.attrs['traffic']}"
+    return {
+        f"{name}_{kind}.png": draw(ds, title=title)
+        for kind, draw in (
+            ("geometry", plot_geometry_evolution),
+            ("quality", plot_quality_evolution),
+            ("settlement_map", plot_settlement_map),
+            ("straight_line", plot_straight_line),
+        )
+    }
+
+
+def line_figure(datasets) -> dict:
+    """``line.png``, the straight-line diagram of the whole line, for two or more sections
+    (none for one)."""
+    if len(datasets) < 2:
+        return {}
+    return {"line.png": plot_line(datasets, title=_line_title(datasets))}
+
+
 def write_outputs(datasets, folder) -> list[str]:
     """Write every file of a prediction into ``folder``; return the file names.
 
@@ -232,23 +262,18 @@ def write_outputs(datasets, folder) -> list[str]:
         frame.to_csv(folder / name, index=False, float_format="%.6g")
         names.append(name)
 
+    def figures(drawn):
+        for file, fig in drawn.items():
+            save(fig, folder / file)
+            names.append(file)
+
     for ds in datasets:
         name = ds.attrs["section"]
         write_netcdf(ds, folder / f"deterioration_{name}.nc")
         names.append(f"deterioration_{name}.nc")
         csv(settlement_table(ds), f"settlement_{name}.csv")
-        title = f"{name}: {ds.attrs['traffic']}"
-        for kind, draw in (
-            ("geometry", plot_geometry_evolution),
-            ("quality", plot_quality_evolution),
-            ("settlement_map", plot_settlement_map),
-            ("straight_line", plot_straight_line),
-        ):
-            save(draw(ds, title=title), folder / f"{name}_{kind}.png")
-            names.append(f"{name}_{kind}.png")
-    if len(datasets) > 1:
-        save(plot_line(datasets, title=_line_title(datasets)), folder / "line.png")
-        names.append("line.png")
+        figures(section_figures(ds))
+    figures(line_figure(datasets))
     csv(summary(datasets), "summary.csv")
     tables = [
         ("quality.csv", quality_table),

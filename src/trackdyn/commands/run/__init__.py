@@ -129,30 +129,26 @@ def run_wide(ds, table) -> str:
     return f"largest displacement across each secondary suspension [mm]: {shown}; {bounce}"
 
 
-def write_run_figures(ds, spec: Scenario, folder: Path) -> None:
-    """Draw a run's figures into ``folder``: wheel loads, their exceedance, secondary
-    displacement and, with friction wedges, wedge friction.
+def run_figures(ds, delta: float, marks=()) -> dict:
+    """A run's figures by file name: wheel loads, their exceedance, secondary displacement
+    and, with friction wedges, wedge friction (`trackdyn.plots.run`).
 
     Parameters
     ----------
     ds : xarray.Dataset
         The run.
-    spec : Scenario
-        Its scenario (δ, and whether the track is the built-in example, whose soft spot,
-        voids and structure are marked).
-    folder : Path
-        Output folder.
+    delta : float
+        The dynamic wheel load increment δ of the Ps ± δPs lines [-].
+    marks : sequence of trackdyn.plots.Mark
+        Stretches of track marked (the built-in example's soft spot, voids and structure:
+        `trackdyn.plots.example_marks`).
     """
-    marks = example_marks() if spec.track.geometry is None else []
-    delta = spec.run.delta
-    figures = {
+    return {
         "wheel_loads.png": plot_wheel_loads(ds, delta=delta, marks=marks),
         "wheel_load_exceedance.png": plot_wheel_load_exceedance(ds, delta=delta),
         "secondary_displacement.png": plot_secondary(ds, marks=marks),
         "wedge_friction.png": plot_wedge_friction(ds),
     }
-    for name, fig in figures.items():
-        save(fig, folder / name)
 
 
 @recorded
@@ -190,7 +186,9 @@ def run(scenario, out, overwrite: bool, console) -> None:
         record.headline = headline(table)
         write_netcdf(ds, stage / "results.nc")
         table.to_csv(stage / "summary.csv", index=False, float_format="%.4g")
-        write_run_figures(ds, spec, stage)
+        marks = example_marks() if spec.track.geometry is None else []
+        for name, fig in run_figures(ds, spec.run.delta, marks).items():
+            save(fig, stage / name)
     title = f"{ds.attrs['model']}: {vehicle.name}, {spec.run.speed_kmh:g} km/h"
     console.print(frame_table(table.drop(columns=list(RUN_WIDE)), title))
     console.print(Text(run_wide(ds, table)))
