@@ -2,8 +2,8 @@
 
 Run with ``python benchmarks/lanes.py`` (``--smoke`` for a short check in CI). On one
 numba thread, a batch of L runs of one model goes as `central.solve` sends it (groups of
-`LANES` runs side by side in the lanes, `advance_groups`, the last with idle lanes when at
-least `MIN_LANE_RUNS` are left over; fewer one by one, `advance_runs`), timed against
+`LANES` runs side by side in the lanes, `advance_lanes`, the last with idle lanes when at
+least `MIN_LANE_RUNS` are left over; fewer one by one, `advance`), timed against
 the per-run loop (`advance`) in the same process, on the same track input (8 Hz, 1 mm, a
 phase per run; input sampled beforehand, every 10th step stored, best of 5). The stored
 arrays of each run are checked to equal the run alone, to the bit. "8 / one" is the time
@@ -27,9 +27,9 @@ from trackdyn.solver.central import (
     LANES,
     NOT_STARTED,
     advance,
-    advance_groups,
-    advance_runs,
+    advance_lanes,
     in_lanes,
+    in_threads,
     lane_groups,
     run_matrices,
     step_matrices,
@@ -116,17 +116,26 @@ def batch(model, k, r, repeat, keep=None):
         status = np.zeros((max(runs, take.size), 2), np.int64)
         status[runs:, 0] = NOT_STARTED  # the idle lanes'
         t = time.perf_counter()
+        groups = [
+            (*(a if f in idx else a[g] for f, a in zip(mats._fields, lane_mats, strict=True)),
+             lane["static"][g], k_lanes[g], r_lanes[g], np.zeros((0, nc, LANES, 0)),
+             lane["y_start"][g], lane["y_step"][g], count[g], lane_z[g], lane["dt"][g], 0,
+             lane["every"][g], 50, lane["row0"][g], *out,
+             status[: take.size].reshape(n_groups, LANES, 2)[g])
+            for g in range(n_groups)
+        ]  # fmt: skip
         with vectorised():
-            advance_groups(
-                *lane_mats, lane["static"], k_lanes, r_lanes, np.zeros((n_groups, 0, nc, LANES, 0)),
-                lane["y_start"], lane["y_step"], count, lane_z, lane["dt"], 0, lane["every"], 50,
-                lane["row0"], *out, status[: take.size].reshape(n_groups, LANES, 2),
-            )  # fmt: skip
-        advance_runs(
-            *run_mats, alone["static"], k_one, r_one, np.zeros((0, nc, 0)), alone["y_start"],
-            alone["y_step"], in_start, z[one], alone["dt"], 0, alone["every"], 50,
-            alone["row0"], *out, status[one],
-        )  # fmt: skip
+            in_threads(advance_lanes, groups)
+        ones = [
+            (*(a if f in idx else a[b] for f, a in zip(mats._fields, run_mats, strict=True)),
+             alone["static"][b], k_one[in_start[b]:in_start[b + 1]],
+             r_one[in_start[b]:in_start[b + 1]], np.zeros((0, nc, 0)), alone["y_start"][b],
+             alone["y_step"][b], z[one][b], alone["dt"][b], 0, alone["every"][b], 50,
+             *(o[alone["row0"][b]:] for o in out))
+            for b in range(runs - grouped)
+        ]  # fmt: skip
+        for b, ended in enumerate(in_threads(advance, ones)):
+            status[grouped + b] = ended
         best = min(best, time.perf_counter() - t)
         assert (status[:runs, 0] == DONE).all(), "a run of the benchmark stopped"
     return best, [[a[b * rows : (b + 1) * rows] for a in out] for b in range(runs)]

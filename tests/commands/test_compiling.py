@@ -39,7 +39,7 @@ def test_the_cache_folder_is_numbas():
     from trackdyn.beam import railseat
     from trackdyn.solver import central
 
-    for module, function in ((central, "advance_runs"), (railseat, "_window_solve")):
+    for module, function in ((central, "advance"), (railseat, "_window_solve")):
         kept = Path(getattr(module, function)._cache.cache_path)
         assert kept == cache_folder(Path(module.__file__)), function
 

@@ -17,13 +17,12 @@ import sys
 from pathlib import Path
 
 KERNELS: dict[str, tuple[tuple[str, str], ...]] = {
-    "run": (("solver/central.py", "advance_runs"),),
-    "study": (("solver/central.py", "advance_lanes"), ("solver/central.py", "advance_groups")),
-    "deteriorate": (("solver/central.py", "advance_runs"), ("beam/railseat.py", "_window_solve")),
-    "calibrate": (("solver/central.py", "advance_runs"), ("beam/railseat.py", "_window_solve")),
+    "run": (("solver/central.py", "advance"),),
+    "study": (("solver/central.py", "advance_lanes"),),
+    "deteriorate": (("solver/central.py", "advance"), ("beam/railseat.py", "_window_solve")),
+    "calibrate": (("solver/central.py", "advance"), ("beam/railseat.py", "_window_solve")),
     "interventions": (
         ("solver/central.py", "advance_lanes"),
-        ("solver/central.py", "advance_groups"),
         ("beam/railseat.py", "_window_solve"),
     ),
 }

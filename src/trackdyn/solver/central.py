@@ -45,7 +45,7 @@ from typing import Any, NamedTuple
 
 import numba
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from trackdyn.errors import TrackdynInputError
 from trackdyn.lanewise import FASTMATH, LANES, lanewise, load, store, total, vectorised
@@ -545,57 +545,22 @@ def advance_lanes(
         _write_staged(b, row0[b] + stored[b] - staged[b], staged[b], outs, stages)
 
 
-@njit(cache=True, parallel=True, nogil=True)
-def advance_runs(
-    p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dc_idx, dc_val, dw_idx, dw_val,
-    ds_idx, ds_val, H, jinv, wedge, contact, static_load,
-    k_in, r_in, table, y_start, y_step, in_start,
-    z, dt, step0, store_every, max_iter, row0,
-    out_q, out_v, out_a, out_wl, out_secondary, out_fw, out_vw, out_k, out_r, status,
-):  # fmt: skip
-    """`advance` for runs one by one, in parallel over the runs.
+def in_threads(kernel, calls: list[tuple]) -> list:
+    """``kernel(*args)`` for each ``args`` of ``calls``, their results in order: in numba's
+    number of threads at once when that is more than one (the loops release the GIL), else
+    one after the other.
 
-    The sparse rows' indices are shared; every other array of `StepMatrices` and
-    ``static_load, y_start, y_step, z, dt, store_every, row0`` carry a leading run axis.
-    The inputs of run ``b`` are the rows ``in_start[b]:in_start[b + 1]`` of ``k_in``,
-    ``r_in`` (and ``table``), its stored steps go to the output rows from ``row0[b]`` on.
-    A run whose ``status[b, 0]`` is not `DONE` is left alone; the others get there the
-    pair `advance` returns.
+    The runs one by one and the groups of lanes are spread over threads here, in Python,
+    rather than by a compiled ``prange`` loop around `advance` and `advance_lanes`: such a
+    loop is a kernel of its own to compile (5 s for the groups', 2.3 s for the runs' on
+    this project's machine, beyond the loops they call), on every first run, for a call
+    per block of 8192 steps.
     """
-    for b in prange(z.shape[0]):
-        if status[b, 0] == DONE:
-            lo, hi = in_start[b], in_start[b + 1]
-            tab = table[lo:hi] if table.shape[0] > 0 else table
-            r0 = row0[b]
-            status[b, 0], status[b, 1] = advance(
-                p_idx, p_val[b], gc_idx, gc_val[b], gw_idx, gw_val[b], dc_idx, dc_val[b],
-                dw_idx, dw_val[b], ds_idx, ds_val[b], H[b], jinv[b], wedge[b], contact[b],
-                static_load[b], k_in[lo:hi], r_in[lo:hi], tab, y_start[b], y_step[b],
-                z[b], dt[b], step0, store_every[b], max_iter,
-                out_q[r0:], out_v[r0:], out_a[r0:], out_wl[r0:], out_secondary[r0:],
-                out_fw[r0:], out_vw[r0:], out_k[r0:], out_r[r0:],
-            )  # fmt: skip
-
-
-@njit(cache=True, parallel=True, nogil=True)
-def advance_groups(
-    p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dc_idx, dc_val, dw_idx, dw_val,
-    ds_idx, ds_val, H, jinv, wedge, contact, static_load,
-    k_in, r_in, table, y_start, y_step, count,
-    z, dt, step0, store_every, max_iter, row0,
-    out_q, out_v, out_a, out_wl, out_secondary, out_fw, out_vw, out_k, out_r, status,
-):  # fmt: skip
-    """`advance_lanes` for groups of lanes, in parallel over the groups: every array of
-    `advance_lanes` but the sparse rows' indices and the outputs carries a leading group
-    axis."""
-    for g in prange(z.shape[0]):
-        advance_lanes(
-            p_idx, p_val[g], gc_idx, gc_val[g], gw_idx, gw_val[g], dc_idx, dc_val[g], dw_idx,
-            dw_val[g], ds_idx, ds_val[g], H[g], jinv[g], wedge[g], contact[g], static_load[g],
-            k_in[g], r_in[g], table[g], y_start[g], y_step[g], count[g],
-            z[g], dt[g], step0, store_every[g], max_iter, row0[g],
-            out_q, out_v, out_a, out_wl, out_secondary, out_fw, out_vw, out_k, out_r, status[g],
-        )  # fmt: skip
+    threads = min(numba.get_num_threads(), len(calls))
+    if threads <= 1:
+        return [kernel(*args) for args in calls]
+    with ThreadPoolExecutor(max_workers=threads) as pool:
+        return [done.result() for done in [pool.submit(kernel, *args) for args in calls]]
 
 
 def start_state(p: Problem, wedge) -> np.ndarray:
@@ -723,10 +688,10 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None,
           keep=OUTPUTS) -> list:  # fmt: skip
     """Integrate runs of one model side by side: one compiled call per block of steps.
 
-    The runs go in groups of `LANES` through `advance_groups` (side by side in the vector
-    lanes, in parallel over the groups), the last group with idle lanes when at least
-    `MIN_LANE_RUNS` runs are left over; fewer go through `advance_runs` (one by one, in
-    parallel over the runs).
+    The runs go in groups of `LANES` through `advance_lanes` (side by side in the vector
+    lanes, the groups in threads, `in_threads`), the last group with idle lanes when at
+    least `MIN_LANE_RUNS` runs are left over; fewer go through `advance` (one by one, in
+    threads).
 
     Parameters
     ----------
@@ -757,7 +722,6 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None,
     mats = run_matrices([p.model for p in problems], [p.dt for p in problems])
     idx = {f for f in mats._fields if f.endswith("_idx")}
     lane_mats = [a if f in idx else in_lanes(a, take) for f, a in mats._asdict().items()]
-    run_mats = [a if f in idx else a[one] for f, a in mats._asdict().items()]
     errors: list = [None] * runs
     # DONE: running; the rows of idle lanes follow the runs' (there are none one by one)
     status = np.zeros((max(runs, lanes), 2), np.int64)
@@ -833,20 +797,31 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None,
     for first, sampled in _sampled_blocks(sample, firsts, numba.get_num_threads() > 1):
         (k, r, table, count), (k1, r1, table1, in_start), steps = sampled
         row0 = rows[:-1] + (first + per_run["every"] - 1) // per_run["every"]
-        if n_groups:  # mypy cannot match star-args to a compiled function's arity
+        lane_row0 = in_lanes(row0, take)
+        groups = [  # each group's arguments of `advance_lanes`
+            (*(a if f in idx else a[g] for f, a in zip(mats._fields, lane_mats, strict=True)),
+             lane["static"][g], k[g], r[g], table[g], lane["y_start"][g], lane["y_step"][g],
+             count[g], lane_z[g], lane["dt"][g], first, lane["every"][g], newton_max_iter,
+             lane_row0[g], *flat.values(), lane_status[g])
+            for g in range(n_groups)
+        ]  # fmt: skip
+        if groups:
             with vectorised():
-                advance_groups(  # type: ignore[call-arg]
-                    *lane_mats, lane["static"], k, r, table, lane["y_start"], lane["y_step"],
-                    count, lane_z, lane["dt"], first, lane["every"], newton_max_iter,
-                    in_lanes(row0, take), *flat.values(), lane_status,
-                )  # fmt: skip
-        if in_groups < runs:
-            advance_runs(  # type: ignore[call-arg]
-                *run_mats, per_run["static"][one], k1, r1, table1, per_run["y_start"][one],
-                per_run["y_step"][one], in_start, z[one], per_run["dt"][one], first,
-                per_run["every"][one], newton_max_iter, row0[one] - split, *flat_one.values(),
-                status[one],
-            )  # fmt: skip
+                in_threads(advance_lanes, groups)
+        going = [b for b in range(in_groups, runs) if status[b, 0] == DONE]
+        alone = [  # each running run's arguments of `advance`, one by one
+            (*(a if f in idx else a[b] for f, a in zip(mats._fields, mats, strict=True)),
+             per_run["static"][b], *(a[in_start[b - in_groups]:in_start[b - in_groups + 1]]
+                                     for a in (k1, r1)),
+             table1[in_start[b - in_groups]:in_start[b - in_groups + 1]]
+             if table1.shape[0] else table1,
+             per_run["y_start"][b], per_run["y_step"][b], z[b], per_run["dt"][b], first,
+             per_run["every"][b], newton_max_iter,
+             *(o[row0[b] - split:] for o in flat_one.values()))
+            for b in going
+        ]  # fmt: skip
+        for b, ended in zip(going, in_threads(advance, alone), strict=True):
+            status[b] = ended
         for b in range(runs):
             code, at = status[b]
             if code in (NEWTON_FAILED, NOT_FINITE) and errors[b] is None:
