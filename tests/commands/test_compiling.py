@@ -46,7 +46,7 @@ def test_the_cache_folder_is_numbas():
 
 def test_note_when_an_index_is_missing_or_older_than_its_source(monkeypatch, tmp_path):
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
-    assert compiling_note("run") == "compiling the solver once (about 5 s; cached for later runs)"
+    assert compiling_note("run") == "compiling the solver once (about 3 s; cached for later runs)"
     assert compiling_note("track") is None  # compiles little
     ((file, function),) = KERNELS["run"]
     index = index_file(tmp_path, file, function)

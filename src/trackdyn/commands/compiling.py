@@ -33,9 +33,9 @@ every time). ``interventions``: a study of ``kind = "interventions"``. A command
 (track, example) compiles little."""
 
 SECONDS: dict[str, int] = {
-    "run": 5,
+    "run": 3,
     "study": 30,
-    "deteriorate": 12,
+    "deteriorate": 9,
     "calibrate": 12,
     "interventions": 25,
 }
