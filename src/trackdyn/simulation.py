@@ -67,14 +67,26 @@ def time_step(
     return dt, 2.0 / omega, omega
 
 
-def _problem(vehicle, track, o: RunOptions, keep=OUTPUTS) -> Problem:
+def _shared(made: dict, key: tuple, make):
+    """``make()``, made once per ``key`` in ``made``: what the runs of a batch with equal
+    inputs share (a key names its objects by ``id``; ``made`` lives no longer than they)."""
+    if key not in made:
+        made[key] = make()
+    return made[key]
+
+
+def _problem(vehicle, track, o: RunOptions, keep=OUTPUTS, made: dict | None = None) -> Problem:
     """The solver's view of one run: model, track input, path, time step and storage.
 
     With ``o.track == "discrete"`` the input is a `DiscreteTrack` (given, or built from the
     linearised track) and the default step is also kept within the track's own stable step.
     A run whose stored arrays (``keep``, `trackdyn.solver.OUTPUTS`; every one on the discrete
     track) would not fit in memory is refused before it starts (`RUN_MEMORY_FACTOR`).
+    Runs given the same ``made`` (`_shared`) share the linearisation of a track about the
+    same static wheel load [N] and the `ContactInput` of a linearised track under the same
+    contacts: one object, made once, as each run alone would make it.
     """
+    made = {} if made is None else made
     speed = o.speed
     m = build_model(o.model, vehicle)
     given = track if isinstance(track, DiscreteTrack) else None
@@ -83,7 +95,11 @@ def _problem(vehicle, track, o: RunOptions, keep=OUTPUTS) -> Problem:
     lin = (
         track
         if isinstance(track, LinearisedTrack)
-        else track.linearise(vehicle.static_wheel_load, o.delta, extrapolate=o.extrapolate)
+        else _shared(
+            made,
+            ("linearised", id(track), vehicle.static_wheel_load, o.delta, o.extrapolate),
+            lambda: track.linearise(vehicle.static_wheel_load, o.delta, extrapolate=o.extrapolate),
+        )
     )
     lo, hi = lin.track.extent
     for key, value in (("start_m", o.start_m), ("end_m", o.end_m)):
@@ -101,7 +117,10 @@ def _problem(vehicle, track, o: RunOptions, keep=OUTPUTS) -> Problem:
             f"{front - rear:.2f} m"
         )
     default_dt, limit, omega = time_step(m, lin, speed)
-    inputs: ContactInput | DiscreteTrack = ContactInput(m, lin, o.nonlinear)
+    contacts = ("contacts", id(lin), m.contact_rails, m.contact_axles, o.nonlinear)
+    inputs: ContactInput | DiscreteTrack = _shared(
+        made, contacts, lambda: ContactInput(m, lin, o.nonlinear)
+    )
     if o.track == "discrete":
         inputs = given or discrete_track(lin)
         stable = discrete.stable_step(inputs, m.static_wheel_load)
@@ -193,9 +212,10 @@ def run_batch(vehicles: list[Vehicle], tracks, options: list[RunOptions], *,
             f"{len(options)} run options; give one of each per run"
         )
     made: list = []
+    shared: dict = {}
     for v, trk, o in zip(vehicles, tracks, options, strict=True):
         try:
-            made.append(_problem(v, trk, o, keep))
+            made.append(_problem(v, trk, o, keep, shared))
         except TrackdynInputError as exc:
             made.append(exc)
     results: list = list(made)

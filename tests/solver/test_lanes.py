@@ -19,6 +19,7 @@ from trackdyn.options import RunOptions
 from trackdyn.simulation import run_batch
 from trackdyn.solver import central
 from trackdyn.track.inputs import ContactInput
+from trackdyn.track.synthetic import synthetic_track
 from trackdyn.vehicle.models import MODELS
 from trackdyn.vehicle.parameters import load_vehicle
 
@@ -69,6 +70,25 @@ def test_lanes_on_the_nonlinear_track(lin, model):
     vehicles, options = varied(model, central.LANES + 1, nonlinear=True)
     batch = run_batch(vehicles, lin, options)
     assert_alone(batch, vehicles, [lin] * len(batch), options)
+
+
+@pytest.mark.parametrize("model", ["2dof", "11dof"])
+def test_runs_on_one_track_share_its_input(model):
+    # runs given the track itself, differing in the wedge friction (one static wheel
+    # load): one linearisation and one contact input, sampled once where the path is the
+    # same (all lanes then hold one sample); the empty wagon (another static load) and a
+    # run at another speed (another path) among them: each run is still what it is alone
+    track = synthetic_track(60.0, spectrum="fra4", seed=5)
+    vehicles = [load_vehicle("loaded", mu=V.mu * (0.8 + 0.05 * i)) for i in range(7)]
+    vehicles.insert(3, EMPTY)
+    options = [RunOptions(model=model, store_every=1)] * len(vehicles)
+    options[5] = RunOptions(model=model, store_every=1, speed_kmh=70.0)
+    batch = run_batch(vehicles, track, options)
+    assert not any(isinstance(r, Failure) for r in batch)
+    inputs = [r.problem.inputs for r in batch]
+    assert all(x is inputs[0] for i, x in enumerate(inputs) if i != 3)
+    assert inputs[3] is not inputs[0]
+    assert_alone(batch, vehicles, [track] * len(batch), options)
 
 
 def test_two_groups_of_lanes(lin):

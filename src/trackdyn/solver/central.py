@@ -75,9 +75,12 @@ CHUNK_BYTES = 32 * 2**20
 (a batch's block is shortened to fit; the nonlinear contacts' tables take most)."""
 
 STAGED = 128
-"""Stored steps of each run in the lanes held before they are written to its outputs
-(`advance_lanes`): a run's rows are then written one block after the other, not one row
-of each of the lanes' outputs after the other."""
+"""Stored steps of the lanes held before they are written to the runs' outputs
+(`advance_lanes`): a stored step is a row of `LANES` values per column, written in one
+vector store each (staged value by value and lane by lane, 8 runs of the 11-DOF model
+over 300 m storing every step took 138 ms in the loop, 124 ms so; `benchmarks/batch.py`),
+and a run's rows are then written one block after the other, not one row of each of the
+lanes' outputs after the other."""
 
 DONE, NEWTON_FAILED, NOT_FINITE, NOT_STARTED = 0, 1, 2, 3
 """How `advance` ends: all steps done; no Newton solution at a step; a stored
@@ -290,14 +293,32 @@ def advance(
 
 
 @njit(cache=True, inline="always")
-def _write_staged(b, first, count, outs, stages):
-    """Write lane ``b``'s ``count`` staged steps to the rows from ``first`` on of the
-    outputs ``outs``: each from its stage (lanes, `STAGED`, width) in ``stages``."""
-    for a in range(len(outs)):
-        out, stage = outs[a], stages[a]
-        for k in range(count):
-            for i in range(out.shape[1]):
-                out[first + k, i] = stage[b, k, i]
+def _stage(stage, at, source, first, rows):
+    """Rows ``first`` to ``first + rows`` of ``source`` into the rows from ``at`` on of
+    ``stage`` (flat arrays of rows of `LANES` values, `load`)."""
+    for i in range(rows):
+        store(stage, at + i, load(source, first + i))
+
+
+@njit(cache=True, inline="always")
+def _write_staged(stage, valid, slots, row0, written, outs, offsets):
+    """Write the first ``slots`` staged steps of each lane to its outputs.
+
+    ``stage`` is (`STAGED`, columns, lanes): output ``a`` of ``outs`` in the columns from
+    ``offsets[a]`` on. Lane ``b``'s steps are the slots where ``valid[slot, b]``; they go
+    to the rows from ``row0[b] + written[b]`` on, and ``written[b]`` counts them.
+    """
+    for b in range(valid.shape[1]):
+        for a in range(len(outs)):
+            out, o = outs[a], offsets[a]
+            row = row0[b] + written[b]
+            for k in range(slots):
+                if valid[k, b]:
+                    for i in range(out.shape[1]):
+                        out[row, i] = stage[k, o + i, b]
+                    row += 1
+        for k in range(slots):
+            written[b] += valid[k, b]
 
 
 _fma = lanewise("c + a * b")
@@ -364,19 +385,17 @@ def advance_lanes(
     q1 = np.empty(n * lanes)
     out_v_l, out_a_l = np.empty(n * lanes), np.empty(n * lanes)  # the stored steps' rows
     out_sec_l, out_wl_l = np.empty(ds_idx.shape[0] * lanes), np.empty(nc * lanes)
-    # each lane's stored steps, written to the outputs `STAGED` at a time
-    by_dof, by_wedge = np.empty((3, lanes, STAGED, n)), np.empty((2, lanes, STAGED, nw))
-    by_contact = np.empty((3, lanes, STAGED, nc))
-    stage_q, stage_v, stage_a = by_dof[0], by_dof[1], by_dof[2]
-    stage_sec = np.empty((lanes, STAGED, ds_idx.shape[0]))
-    stage_fw, stage_vw = by_wedge[0], by_wedge[1]
-    stage_wl, stage_k, stage_r = by_contact[0], by_contact[1], by_contact[2]
+    # the stored steps, `STAGED` at a time, a row of the lanes per column of the kept
+    # outputs (the others have none), and in which lanes each slot is a stored step
     outs = (out_q, out_v, out_a, out_wl, out_secondary, out_fw, out_vw, out_k, out_r)
-    stages = (stage_q, stage_v, stage_a, stage_wl, stage_sec, stage_fw, stage_vw, stage_k, stage_r)
-    staged = np.zeros(lanes, np.int64)
-    kept_dof = out_q.shape[1] + out_v.shape[1] + out_a.shape[1] > 0
-    kept_wedge = out_fw.shape[1] + out_vw.shape[1] > 0
-    kept_input = out_k.shape[1] + out_r.shape[1] > 0
+    offsets = np.zeros(len(outs) + 1, np.int64)
+    for a in range(len(outs)):
+        offsets[a + 1] = offsets[a] + outs[a].shape[1]
+    stage = np.empty((STAGED, offsets[-1], lanes))
+    stage_l = stage.reshape(-1)
+    valid = np.zeros((STAGED, lanes), np.int64)
+    slot = 0
+    written = np.zeros(lanes, np.int64)
     fc = np.empty(nc * lanes)
     vfree = np.empty(nw * lanes)
     rhs = np.empty(nw * lanes)
@@ -389,7 +408,6 @@ def advance_lanes(
     jl = np.empty(nw * nw * lanes)  # the inverse of each lane's stick/slip states `held`
     held = np.full(lanes, -1, np.int64)
     run = np.empty(lanes, np.bool_)
-    stored = np.zeros(lanes, np.int64)
     due = -step0 % store_every  # each lane's next stored step
     next_due = due.min()
     steps = count.max()
@@ -501,48 +519,39 @@ def advance_lanes(
                     dv = _fma(load(dcv, c * dc_idx.shape[1] + j), load(out_v_l, dc_idx[c, j]), dv)
                 wl = _wheel_load(load(cv, cc * c), dv, load(fc, c), static, load(cv, cc * c + 1))
                 store(out_wl_l, c, wl)
+            kept = 0
             for b in range(lanes):
+                valid[slot, b] = 0
                 if due[b] != s:
                     continue
                 due[b] += store_every[b]
                 if run[b] and bad[b]:
                     status[b, 0], status[b, 1] = NOT_FINITE, s
                     run[b] = False
-                if not run[b]:
-                    continue
-                k = staged[b]  # only the kept outputs (the others have no columns)
-                if kept_dof:
-                    for i in range(n):
-                        stage_q[b, k, i] = z[i, b]
-                        stage_v[b, k, i] = out_v_l[i * lanes + b]
-                        stage_a[b, k, i] = out_a_l[i * lanes + b]
-                if out_secondary.shape[1]:
-                    for u in range(ds_idx.shape[0]):
-                        stage_sec[b, k, u] = out_sec_l[u * lanes + b]
-                if kept_wedge:
-                    for w in range(nw):
-                        stage_fw[b, k, w] = F[w * lanes + b]
-                        stage_vw[b, k, w] = v[w * lanes + b]
-                if out_wl.shape[1]:
-                    for c in range(nc):
-                        stage_wl[b, k, c] = out_wl_l[c * lanes + b]
-                if kept_input:
-                    for c in range(nc):
-                        stage_k[b, k, c] = k_in[s, c, b]
-                        stage_r[b, k, c] = r_in[s, c, b]
-                stored[b] += 1
-                staged[b] += 1
-                if staged[b] == STAGED:
-                    _write_staged(b, row0[b] + stored[b] - staged[b], staged[b], outs, stages)
-                    staged[b] = 0
+                valid[slot, b] = run[b]
+                kept += run[b]
+            if kept:
+                at = slot * offsets[-1]  # the kept outputs, in the order of `outs`
+                _stage(stage_l, at + offsets[0], zl, 0, out_q.shape[1])
+                _stage(stage_l, at + offsets[1], out_v_l, 0, out_v.shape[1])
+                _stage(stage_l, at + offsets[2], out_a_l, 0, out_a.shape[1])
+                _stage(stage_l, at + offsets[3], out_wl_l, 0, out_wl.shape[1])
+                _stage(stage_l, at + offsets[4], out_sec_l, 0, out_secondary.shape[1])
+                _stage(stage_l, at + offsets[5], F, 0, out_fw.shape[1])
+                _stage(stage_l, at + offsets[6], v, 0, out_vw.shape[1])
+                _stage(stage_l, at + offsets[7], kv, s * nc, out_k.shape[1])
+                _stage(stage_l, at + offsets[8], rv, s * nc, out_r.shape[1])
+                slot += 1
+                if slot == STAGED:
+                    _write_staged(stage, valid, slot, row0, written, outs, offsets)
+                    slot = 0
             next_due = due.min()
         going = load(run, 0)
         for i in range(n):
             zi = load(zl, i)
             store(zl, n + i, _select(going, zi, load(zl, n + i)))
             store(zl, i, _select(going, load(q1, i), zi))
-    for b in range(lanes):
-        _write_staged(b, row0[b] + stored[b] - staged[b], staged[b], outs, stages)
+    _write_staged(stage, valid, slot, row0, written, outs, offsets)
 
 
 def in_threads(kernel, calls: list[tuple]) -> list:
@@ -764,7 +773,8 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None,
     def sample(first):
         """Track input of the block of steps from ``first`` on (none for stopped runs):
         in the lanes with each lane's number of steps, and of the runs one by one, one
-        after the other, with where each starts."""
+        after the other, with where each starts. Runs on the same input (one object) along
+        the same path share one sample of it."""
         count = np.zeros(max(runs, lanes), np.int64)
         for b, p in enumerate(problems):
             if status[b, 0] == DONE:
@@ -772,24 +782,32 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None,
         k, r = buffers[first // block % 2]
         shape = (n_groups, int(count[:lanes].max(initial=0)), nc, LANES)
         table = np.zeros((*shape, grid) if grid else (n_groups, 0, nc, LANES, 0))
+        sampled: dict = {}
 
         def inputs(b):
             p = problems[b]
-            return p.inputs(p.centre0 + p.speed * p.dt * np.arange(first, first + count[b]))
+            key = (id(p.inputs), p.centre0, p.speed, p.dt, count[b])
+            if key not in sampled:
+                at = p.centre0 + p.speed * p.dt * np.arange(first, first + count[b])
+                sampled[key] = p.inputs(at)
+            return sampled[key]
 
         for g in range(n_groups):
-            mine = [b for b in take[g].tolist() if b >= 0 and count[b]]
-            for b in mine:
-                n = count[b]
-                staged[0, b % LANES, :n], staged[1, b % LANES, :n], tb = inputs(b)
+            mine = {b: inputs(b) for b in take[g].tolist() if b >= 0 and count[b]}
+            for b, (_, _, tb) in mine.items():
                 if grid:
-                    table[g, :n, :, b % LANES] = tb
-            if mine:
-                top = int(count[mine].max())
+                    table[g, : count[b], :, b % LANES] = tb
+            if len({id(x) for x in mine.values()}) == 1:  # one input in every lane
+                kb, rb, _ = next(iter(mine.values()))
+                k[g, : len(kb)], r[g, : len(kb)] = kb[..., None], rb[..., None]
+            elif mine:
+                for b, (kb, rb, _) in mine.items():
+                    staged[0, b % LANES, : count[b]], staged[1, b % LANES, : count[b]] = kb, rb
+                top = int(count[list(mine)].max())
                 k[g, :top], r[g, :top] = staged[:, :, :top].transpose(0, 2, 3, 1)
-        sampled = [inputs(b) for b in range(in_groups, runs) if count[b]]
+        singly = [inputs(b) for b in range(in_groups, runs) if count[b]]
         empty = (np.zeros((0, nc)), np.zeros((0, nc)), np.zeros((0, nc, grid)))
-        alone = [np.concatenate(a) for a in zip(empty, *sampled, strict=True)]
+        alone = [np.concatenate(a) for a in zip(empty, *singly, strict=True)]
         in_start = np.cumsum([0, *count[one]])
         per_lane = count[:lanes].reshape(n_groups, LANES)
         return (k, r, table, per_lane), (*alone, in_start), int(count.sum())
