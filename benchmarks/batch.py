@@ -41,8 +41,8 @@ RUNS = 8
 PARTS = {
     "set-up": (simulation, "_problem"),
     "sampling": (ContactInput, "__call__"),
-    "loops": (central, "advance_groups"),
-    "loops ": (central, "advance_runs"),  # one run alone goes one by one
+    "loops": (central, "advance_lanes"),
+    "loops ": (central, "advance"),  # one run alone goes one by one
     "Datasets": (simulation, "make_dataset"),
 }
 """The parts timed: the function of each, as (its module or class, its name)."""
