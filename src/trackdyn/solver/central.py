@@ -724,64 +724,90 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None,
         Per run, a dict of the kept `OUTPUTS` arrays, or the `TrackdynInputError` that
         stopped it.
     """
-    runs = len(problems)
-    take = lane_groups(runs)
-    n_groups, in_groups, lanes = take.shape[0], np.count_nonzero(take >= 0), take.size
-    one = slice(in_groups, runs)  # the runs one by one
-    mats = run_matrices([p.model for p in problems], [p.dt for p in problems])
-    idx = {f for f in mats._fields if f.endswith("_idx")}
-    lane_mats = [a if f in idx else in_lanes(a, take) for f, a in mats._asdict().items()]
-    errors: list = [None] * runs
-    # DONE: running; the rows of idle lanes follow the runs' (there are none one by one)
-    status = np.zeros((max(runs, lanes), 2), np.int64)
-    status[runs:, 0] = NOT_STARTED
-    z = np.zeros((runs, 2 * len(problems[0].model.dof_names)))
-    for b, p in enumerate(problems):
-        try:
-            z[b] = start_state(p, mats.wedge[b])
-        except TrackdynInputError as exc:
-            errors[b], status[b, 0] = exc, NOT_STARTED
-    lane_z, lane_status = in_lanes(z, take), status[:lanes].reshape(n_groups, LANES, 2)
-    rows = np.cumsum([0] + [p.n_store for p in problems])
-    # the outputs, rows[b]: rows[b + 1] for run b: of the runs in the lanes (the kept
-    # arrays' columns), and of the runs one by one (all columns), from rows[in_groups] on
-    width, split = widths(problems[0].model), rows[in_groups]
-    flat = {name: np.empty((split, w if name in keep else 0)) for name, w in width.items()}
-    flat_one = {name: np.empty((rows[-1] - split, w)) for name, w in width.items()}
-    per_run = dict(
-        static=np.array([p.model.static_wheel_load for p in problems]),
-        y_start=np.array([table_step(track_input(p).grid)[0] for p in problems]),
-        y_step=np.array([table_step(track_input(p).grid)[1] for p in problems]),
-        dt=np.array([p.dt for p in problems]),
-        every=np.array([p.store_every for p in problems]),
-    )
-    lane = {name: in_lanes(a, take) for name, a in per_run.items()}
-    nc, grid = len(problems[0].model.contact_names), track_input(problems[0]).grid.size
-    step_bytes = 8 * nc * (2 + grid)
-    block = max(1, min(CHUNK_STEPS, CHUNK_BYTES // step_bytes // runs))
-    firsts = range(0, max(p.n_steps for p in problems), block)
+    batch = _Batch(problems, newton_max_iter, keep)
+    for first, sampled in _sampled_blocks(batch.sample, batch.firsts,
+                                          numba.get_num_threads() > 1):  # fmt: skip
+        steps = batch.advance(first, sampled)
+        if advanced is not None:
+            advanced(steps)
+    return batch.results()
 
-    # the lanes' input (k, r), two blocks' worth, allocated once: the next block is sampled
-    # into one while the loop reads the other (`_sampled_blocks`); idle lanes, and the steps
-    # past a lane's last in a block, are not read
-    buffers = np.zeros((2, 2, n_groups, min(block, firsts.stop), nc, LANES))
-    # a group's runs are sampled into `staged`, each run's steps in a row, and go into the
-    # lanes' layout in one copy: written run by run, each value there is a cache line of
-    # its own (a row of the layout is `LANES` doubles)
-    staged = np.zeros((2, LANES, min(block, firsts.stop), nc))
 
-    def sample(first):
+class _Batch:
+    """The runs of a `solve` call: their matrices, start states, outputs and status, the
+    track input of a block of steps (`sample`), a block's steps (`advance`) and the
+    results.
+
+    Runs in the lanes (the first ``in_groups``) and one by one (the rest) have outputs of
+    their own: ``flat`` (the kept arrays' columns) and ``flat_one`` (all columns, from row
+    ``split`` on); the rows ``rows[b]:rows[b + 1]`` are run ``b``'s.
+    """
+
+    def __init__(self, problems: list[Problem], newton_max_iter: int, keep):
+        self.problems, self.newton_max_iter, self.keep = problems, newton_max_iter, keep
+        runs = self.runs = len(problems)
+        take = self.take = lane_groups(runs)
+        self.n_groups, self.in_groups = take.shape[0], np.count_nonzero(take >= 0)
+        lanes = self.lanes = take.size
+        self.one = slice(self.in_groups, runs)  # the runs one by one
+        mats = self.mats = run_matrices([p.model for p in problems], [p.dt for p in problems])
+        self.idx = {f for f in mats._fields if f.endswith("_idx")}
+        self.lane_mats = [a if f in self.idx else in_lanes(a, take)
+                          for f, a in mats._asdict().items()]  # fmt: skip
+        self.errors: list = [None] * runs
+        # DONE: running; the rows of idle lanes follow the runs' (none one by one)
+        status = self.status = np.zeros((max(runs, lanes), 2), np.int64)
+        status[runs:, 0] = NOT_STARTED
+        z = self.z = np.zeros((runs, 2 * len(problems[0].model.dof_names)))
+        for b, p in enumerate(problems):
+            try:
+                z[b] = start_state(p, mats.wedge[b])
+            except TrackdynInputError as exc:
+                self.errors[b], status[b, 0] = exc, NOT_STARTED
+        self.lane_z = in_lanes(z, take)
+        self.lane_status = status[:lanes].reshape(self.n_groups, LANES, 2)
+        rows = self.rows = np.cumsum([0] + [p.n_store for p in problems])
+        width, split = widths(problems[0].model), rows[self.in_groups]
+        self.split = split
+        self.flat = {name: np.empty((split, w if name in keep else 0))
+                     for name, w in width.items()}  # fmt: skip
+        self.flat_one = {name: np.empty((rows[-1] - split, w)) for name, w in width.items()}
+        self.per_run = dict(
+            static=np.array([p.model.static_wheel_load for p in problems]),
+            y_start=np.array([table_step(track_input(p).grid)[0] for p in problems]),
+            y_step=np.array([table_step(track_input(p).grid)[1] for p in problems]),
+            dt=np.array([p.dt for p in problems]),
+            every=np.array([p.store_every for p in problems]),
+        )
+        self.lane = {name: in_lanes(a, take) for name, a in self.per_run.items()}
+        nc, grid = len(problems[0].model.contact_names), track_input(problems[0]).grid.size
+        self.nc, self.grid = nc, grid
+        step_bytes = 8 * nc * (2 + grid)
+        block = self.block = max(1, min(CHUNK_STEPS, CHUNK_BYTES // step_bytes // runs))
+        self.firsts = range(0, max(p.n_steps for p in problems), block)
+        # the lanes' input (k, r), two blocks' worth, allocated once: the next block is
+        # sampled into one while the loop reads the other (`_sampled_blocks`); idle lanes,
+        # and the steps past a lane's last in a block, are not read
+        depth = min(block, self.firsts.stop)
+        self.buffers = np.zeros((2, 2, self.n_groups, depth, nc, LANES))
+        # a group's runs are sampled into `staged`, each run's steps in a row, and go into
+        # the lanes' layout in one copy: written run by run, each value there is a cache
+        # line of its own (a row of the layout is `LANES` doubles)
+        self.staged = np.zeros((2, LANES, depth, nc))
+
+    def sample(self, first: int):
         """Track input of the block of steps from ``first`` on (none for stopped runs):
         in the lanes with each lane's number of steps, and of the runs one by one, one
         after the other, with where each starts. Runs on the same input (one object) along
         the same path share one sample of it."""
-        count = np.zeros(max(runs, lanes), np.int64)
+        problems, block, nc, grid, take = self.problems, self.block, self.nc, self.grid, self.take
+        count = np.zeros(max(self.runs, self.lanes), np.int64)
         for b, p in enumerate(problems):
-            if status[b, 0] == DONE:
+            if self.status[b, 0] == DONE:
                 count[b] = max(min(block, p.n_steps - first), 0)
-        k, r = buffers[first // block % 2]
-        shape = (n_groups, int(count[:lanes].max(initial=0)), nc, LANES)
-        table = np.zeros((*shape, grid) if grid else (n_groups, 0, nc, LANES, 0))
+        k, r = self.buffers[first // block % 2]
+        shape = (self.n_groups, int(count[: self.lanes].max(initial=0)), nc, LANES)
+        table = np.zeros((*shape, grid) if grid else (self.n_groups, 0, nc, LANES, 0))
         sampled: dict = {}
 
         def inputs(b):
@@ -792,7 +818,7 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None,
                 sampled[key] = p.inputs(at)
             return sampled[key]
 
-        for g in range(n_groups):
+        for g in range(self.n_groups):
             mine = {b: inputs(b) for b in take[g].tolist() if b >= 0 and count[b]}
             for b, (_, _, tb) in mine.items():
                 if grid:
@@ -801,57 +827,68 @@ def solve(problems: list[Problem], newton_max_iter: int = 50, advanced=None,
                 kb, rb, _ = next(iter(mine.values()))
                 k[g, : len(kb)], r[g, : len(kb)] = kb[..., None], rb[..., None]
             elif mine:
+                staged = self.staged
                 for b, (kb, rb, _) in mine.items():
                     staged[0, b % LANES, : count[b]], staged[1, b % LANES, : count[b]] = kb, rb
                 top = int(count[list(mine)].max())
                 k[g, :top], r[g, :top] = staged[:, :, :top].transpose(0, 2, 3, 1)
-        singly = [inputs(b) for b in range(in_groups, runs) if count[b]]
+        singly = [inputs(b) for b in range(self.in_groups, self.runs) if count[b]]
         empty = (np.zeros((0, nc)), np.zeros((0, nc)), np.zeros((0, nc, grid)))
         alone = [np.concatenate(a) for a in zip(empty, *singly, strict=True)]
-        in_start = np.cumsum([0, *count[one]])
-        per_lane = count[:lanes].reshape(n_groups, LANES)
+        in_start = np.cumsum([0, *count[self.one]])
+        per_lane = count[: self.lanes].reshape(self.n_groups, LANES)
         return (k, r, table, per_lane), (*alone, in_start), int(count.sum())
 
-    for first, sampled in _sampled_blocks(sample, firsts, numba.get_num_threads() > 1):
+    def advance(self, first: int, sampled) -> int:
+        """The block of steps from ``first`` on, on its ``sampled`` input (`sample`): the
+        groups through `advance_lanes`, the runs one by one through `advance`, each in
+        threads; a run that stopped gets its error. Returns the steps done."""
         (k, r, table, count), (k1, r1, table1, in_start), steps = sampled
-        row0 = rows[:-1] + (first + per_run["every"] - 1) // per_run["every"]
-        lane_row0 = in_lanes(row0, take)
+        mats, idx, lane, per_run = self.mats, self.idx, self.lane, self.per_run
+        row0 = self.rows[:-1] + (first + per_run["every"] - 1) // per_run["every"]
+        lane_row0 = in_lanes(row0, self.take)
         groups = [  # each group's arguments of `advance_lanes`
-            (*(a if f in idx else a[g] for f, a in zip(mats._fields, lane_mats, strict=True)),
+            (*(a if f in idx else a[g] for f, a in zip(mats._fields, self.lane_mats, strict=True)),
              lane["static"][g], k[g], r[g], table[g], lane["y_start"][g], lane["y_step"][g],
-             count[g], lane_z[g], lane["dt"][g], first, lane["every"][g], newton_max_iter,
-             lane_row0[g], *flat.values(), lane_status[g])
-            for g in range(n_groups)
+             count[g], self.lane_z[g], lane["dt"][g], first, lane["every"][g],
+             self.newton_max_iter, lane_row0[g], *self.flat.values(), self.lane_status[g])
+            for g in range(self.n_groups)
         ]  # fmt: skip
         if groups:
             with vectorised():
                 in_threads(advance_lanes, groups)
-        going = [b for b in range(in_groups, runs) if status[b, 0] == DONE]
+        going = [b for b in range(self.in_groups, self.runs) if self.status[b, 0] == DONE]
+        at = {b: slice(in_start[b - self.in_groups], in_start[b - self.in_groups + 1])
+              for b in going}  # fmt: skip
         alone = [  # each running run's arguments of `advance`, one by one
             (*(a if f in idx else a[b] for f, a in zip(mats._fields, mats, strict=True)),
-             per_run["static"][b], *(a[in_start[b - in_groups]:in_start[b - in_groups + 1]]
-                                     for a in (k1, r1)),
-             table1[in_start[b - in_groups]:in_start[b - in_groups + 1]]
-             if table1.shape[0] else table1,
-             per_run["y_start"][b], per_run["y_step"][b], z[b], per_run["dt"][b], first,
-             per_run["every"][b], newton_max_iter,
-             *(o[row0[b] - split:] for o in flat_one.values()))
+             per_run["static"][b], k1[at[b]], r1[at[b]],
+             table1[at[b]] if table1.shape[0] else table1,
+             per_run["y_start"][b], per_run["y_step"][b], self.z[b], per_run["dt"][b], first,
+             per_run["every"][b], self.newton_max_iter,
+             *(o[row0[b] - self.split:] for o in self.flat_one.values()))
             for b in going
         ]  # fmt: skip
         for b, ended in zip(going, in_threads(advance, alone), strict=True):
-            status[b] = ended
-        for b in range(runs):
-            code, at = status[b]
-            if code in (NEWTON_FAILED, NOT_FINITE) and errors[b] is None:
+            self.status[b] = ended
+        for b in range(self.runs):
+            code, step = self.status[b]
+            if code in (NEWTON_FAILED, NOT_FINITE) and self.errors[b] is None:
                 stop = failure if code == NEWTON_FAILED else non_finite
-                errors[b] = stop(problems[b], first + int(at))
-        if advanced is not None:
-            advanced(steps)
-    where = [(flat, 0)] * in_groups + [(flat_one, split)] * (runs - in_groups)
-    return [
-        errors[b] or {name: out[name][rows[b] - at : rows[b + 1] - at] for name in keep}
-        for b, (out, at) in enumerate(where)
-    ]
+                self.errors[b] = stop(self.problems[b], first + int(step))
+        return steps
+
+    def results(self) -> list:
+        """Per run, a dict of its kept outputs, or the error that stopped it."""
+        rows, in_groups = self.rows, self.in_groups
+        where = [(self.flat, 0)] * in_groups + [(self.flat_one, self.split)] * (
+            self.runs - in_groups
+        )
+        return [
+            self.errors[b]
+            or {name: out[name][rows[b] - at : rows[b + 1] - at] for name in self.keep}
+            for b, (out, at) in enumerate(where)
+        ]
 
 
 def _sampled_blocks(sample, firsts: range, ahead: bool):
