@@ -36,6 +36,7 @@ of a clamped-clamped beam under a point load).
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -65,6 +66,241 @@ START_ITERATIONS = 6
 """Fixed-point iterations of the static start (wheel loads against track deflection)."""
 
 
+TRACK_JIT: dict[str, Any] = dict(
+    cache=True, fastmath=True, error_model="numpy", nogil=True, inline="always"
+)
+"""numba options of the phases of `advance`'s step (`wheel_loads`, `rail_forces`,
+`step_nodes`): those of `advance`, and inlined into it by numba, which keeps the loop as fast
+as in one function (LLVM vectorises the same loops; as plain calls, each with its arrays'
+fields for arguments, the loop took 5 % longer)."""
+
+
+@njit(**TRACK_JIT)
+def wheel_loads(
+    xc, r_in, ax_off, ax_contact, ax_rail, per_contact, x, track, rest_w, rest_th, EI,
+    dc_idx, dc_val, z, static_load, hertz, ax_el, shape, top, flex, rc, wl, fc,
+):  # fmt: skip
+    """The wheel-rail contact loads of a step, from the rail's state and the vehicle's.
+
+    Parameters
+    ----------
+    xc : float
+        Position of the vehicle centre [m].
+    r_in : ndarray, shape (axles,)
+        Unloaded profile at rest under each axle [m].
+    ax_off, ax_contact, ax_rail : ndarray, shape (axles,)
+        Each axle's offset ahead of the centre [m], contact and rail (`axle_table`).
+    per_contact : ndarray, shape (contacts,)
+        Number of axles of each contact [-].
+    x : ndarray, shape (nodes,)
+        Node positions [m].
+    track : ndarray, shape (6, 2, nodes)
+        The track's state (`advance`) [m, rad].
+    rest_w, rest_th : ndarray, shape (2, nodes)
+        Rail deflection [m] and rotation [rad] at rest.
+    EI : float
+        Bending stiffness of the rail [N m²].
+    dc_idx, dc_val : ndarray, shape (contacts, k)
+        The rows of ``Dc`` (the contacts' displacements from the vehicle's), sparse [-, m/rad].
+    z : ndarray, shape (2 dofs,)
+        The vehicle's displacement now and one step before [m, rad].
+    static_load, hertz : float
+        Static wheel load ``Ps`` [N] and linearised Hertz stiffness ``kH`` [N/m].
+    ax_el : ndarray, shape (axles,)
+        Each axle's element, a search start: updated [-].
+
+    Returns
+    -------
+    None
+        Fills ``shape`` (axles, 4) with the Hermite shape functions at each axle [-, m];
+        ``top``, ``flex`` and ``rc`` (contacts,) with the mean rail top [m], local
+        flexibility [m/N] and unloaded profile [m] under each contact's axles; ``wl``
+        (contacts,) with each wheel's load ``W`` [N] and ``fc`` with the contact forces on
+        the vehicle, ``W - Ps`` per axle [N].
+    """
+    nc = dc_idx.shape[0]
+    nodes = x.shape[0]
+    for c in range(nc):
+        top[c] = 0.0
+        flex[c] = 0.0
+        rc[c] = 0.0
+    for a in range(ax_off.shape[0]):
+        c = ax_contact[a]
+        r = ax_rail[a]
+        xa = xc + ax_off[a]
+        e = ax_el[a]
+        while e + 2 < nodes and x[e + 1] <= xa:
+            e += 1
+        ax_el[a] = e
+        L = x[e + 1] - x[e]
+        t = (xa - x[e]) / L
+        t2 = t * t
+        t3 = t2 * t
+        shape[a, 0] = 1.0 - 3.0 * t2 + 2.0 * t3
+        shape[a, 1] = L * (t - 2.0 * t2 + t3)
+        shape[a, 2] = 3.0 * t2 - 2.0 * t3
+        shape[a, 3] = L * (t3 - t2)
+        u = (shape[a, 0] * (track[0, r, e] - rest_w[r, e])
+             + shape[a, 1] * (track[1, r, e] - rest_th[r, e])
+             + shape[a, 2] * (track[0, r, e + 1] - rest_w[r, e + 1])
+             + shape[a, 3] * (track[1, r, e + 1] - rest_th[r, e + 1]))  # fmt: skip
+        pa = t * L
+        pb = L - pa
+        flex[c] += pa * pa * pa * pb * pb * pb / (3.0 * EI * L * L * L) / per_contact[c]
+        top[c] += (r_in[a] + u) / per_contact[c]
+        rc[c] += r_in[a] / per_contact[c]
+    for c in range(nc):
+        dq = 0.0
+        for j in range(dc_idx.shape[1]):
+            dq += dc_val[c, j] * z[dc_idx[c, j]]
+        delta = dq - top[c] + static_load / hertz
+        wl[c] = delta / (1.0 / hertz + flex[c]) if delta > 0.0 else 0.0
+        fc[c] = per_contact[c] * (wl[c] - static_load)
+
+
+@njit(**TRACK_JIT)
+def rail_forces(track, ea, eb, ec4, ec2, i0, ax_contact, ax_rail, ax_el, wl, shape, fw, fm):
+    """The forces on the rail's nodes of the window: its beam elements' and the wheels'.
+
+    Parameters
+    ----------
+    track : ndarray, shape (6, 2, nodes)
+        The track's state (`advance`) [m, rad].
+    ea, eb, ec4, ec2 : ndarray, shape (nodes - 1,)
+        Each element's stiffness terms ``12 EI/L³`` [N/m], ``6 EI/L²`` [N], ``4 EI/L`` and
+        ``2 EI/L`` [N m].
+    i0 : int
+        First node of the window [-].
+    ax_contact, ax_rail, ax_el : ndarray, shape (axles,)
+        Each axle's contact, rail and element [-].
+    wl : ndarray, shape (contacts,)
+        Each contact's wheel load [N].
+    shape : ndarray, shape (axles, 4)
+        The Hermite shape functions at each axle (`wheel_loads`) [-, m].
+
+    Returns
+    -------
+    None
+        Fills ``fw`` and ``fm`` (2 rails, window) with the force [N] and moment [N m] on
+        each node of the window.
+    """
+    width = fw.shape[1]
+    nodes = track.shape[2]
+    for r in range(2):
+        for k in range(width):
+            fw[r, k] = 0.0
+            fm[r, k] = 0.0
+        for e in range(i0 - 1, i0 + width):
+            if e < 0 or e + 1 >= nodes:
+                continue
+            dw = track[0, r, e] - track[0, r, e + 1]
+            t1 = track[1, r, e]
+            t2 = track[1, r, e + 1]
+            f1 = ea[e] * dw + eb[e] * (t1 + t2)
+            m1 = eb[e] * dw + ec4[e] * t1 + ec2[e] * t2
+            m2 = eb[e] * dw + ec2[e] * t1 + ec4[e] * t2
+            k = e - i0
+            if k >= 0:
+                fw[r, k] -= f1
+                fm[r, k] -= m1
+            if k + 1 < width:
+                fw[r, k + 1] += f1
+                fm[r, k + 1] -= m2
+    for a in range(ax_rail.shape[0]):
+        r = ax_rail[a]
+        k = ax_el[a] - i0
+        W = wl[ax_contact[a]]
+        if 0 <= k and k + 1 < width:
+            fw[r, k] += W * shape[a, 0]
+            fm[r, k] += W * shape[a, 1]
+            fw[r, k + 1] += W * shape[a, 2]
+            fm[r, k + 1] += W * shape[a, 3]
+
+
+@njit(**TRACK_JIT)
+def step_nodes(
+    track, fw, fm, i0, xc, x, ax_off, rail_axles, mw, J, ms, kp, cp, kb, cb, sgap, gravity,
+    dt, peak,
+):  # fmt: skip
+    """Advance the window's nodes one step, with the sleepers' pads and ballast contact.
+
+    Parameters
+    ----------
+    track : ndarray, shape (6, 2, nodes)
+        The track's state (`advance`) [m, rad]: the window's nodes are advanced in place.
+    fw, fm : ndarray, shape (2 rails, window)
+        Force [N] and moment [N m] on the rail's nodes of the window (`rail_forces`).
+    i0 : int
+        First node of the window [-].
+    xc : float
+        Position of the vehicle centre [m].
+    x : ndarray, shape (nodes,)
+        Node positions [m].
+    ax_off : ndarray, shape (axles,)
+        Each axle's offset ahead of the centre [m].
+    rail_axles : ndarray, shape (2, k)
+        Each rail's axles from the rear, -1 padded [-].
+    mw, J : ndarray, shape (nodes,)
+        Rail mass [kg] and rotary inertia [kg m] of each node.
+    ms : float
+        Sleeper mass (per rail seat) [kg].
+    kp, cp : float
+        Pad stiffness [N/m] and damping [N s/m].
+    kb : ndarray, shape (2, nodes)
+        Ballast stiffness under each sleeper [N/m].
+    cb : float
+        Ballast damping [N s/m].
+    sgap : ndarray, shape (2, nodes)
+        Seating gap under each sleeper [m].
+    gravity : float
+        Acceleration of gravity [m/s²].
+    dt : float
+        Time step [s].
+    peak : ndarray, shape (axles, nodes)
+        Largest sleeper-ballast force [N] of each sleeper while each axle is the nearest on
+        its rail: updated.
+    """
+    width = fw.shape[1]
+    invdt = 1.0 / dt
+    dt2 = dt * dt
+    for r in range(2):
+        j = 0  # the nearest axle on this rail, from the rear
+        last = 0
+        while last + 1 < rail_axles.shape[1] and rail_axles[r, last + 1] >= 0:
+            last += 1
+        for k in range(width):
+            i = i0 + k
+            while j < last and 2.0 * (x[i] - xc) > (
+                ax_off[rail_axles[r, j]] + ax_off[rail_axles[r, j + 1]]
+            ):
+                j += 1
+            w0 = track[0, r, i]
+            zs0 = track[2, r, i]
+            vw = (w0 - track[3, r, i]) * invdt
+            vz = (zs0 - track[5, r, i]) * invdt
+            pad = kp * (w0 - zs0) + cp * (vw - vz)
+            ballast = 0.0
+            pen = zs0 - sgap[r, i]
+            if pen > 0.0:
+                ballast = kb[r, i] * pen + cb * vz
+                if ballast < 0.0:
+                    ballast = 0.0
+            a = rail_axles[r, j]
+            if a >= 0 and ballast > peak[a, i]:
+                peak[a, i] = ballast
+            aw = (fw[r, k] - pad) / mw[i] + gravity
+            at = fm[r, k] / J[i]
+            az = (pad - ballast) / ms + gravity
+            t0 = track[1, r, i]
+            t_prev = track[4, r, i]
+            track[3, r, i] = w0
+            track[4, r, i] = t0
+            track[5, r, i] = zs0
+            track[0, r, i] = w0 + vw * dt + aw * dt2
+            track[1, r, i] = 2.0 * t0 - t_prev + at * dt2
+            track[2, r, i] = zs0 + vz * dt + az * dt2
+
+
 @njit(cache=True, fastmath=True, error_model="numpy", nogil=True)
 def advance(
     p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dc_idx, dc_val, dw_idx, dw_val,
@@ -82,7 +318,9 @@ def advance(
     its number of nodes, kept ``margin`` [m] behind the rearmost axle; ``ax_el`` each
     axle's element (a search start); ``gravity`` [m/s²]. ``peak`` (axles, nodes) collects
     the largest sleeper-ballast force [N] of each sleeper while each axle is the nearest
-    on its rail (``rail_axles`` (2, k): each rail's axles from the rear, -1 padded).
+    on its rail (``rail_axles`` (2, k): each rail's axles from the rear, -1 padded). A step:
+    the wheel loads (`wheel_loads`), the vehicle (`trackdyn.solver.central.vehicle_step`),
+    the forces on the rail (`rail_forces`), the window's nodes (`step_nodes`), the outputs.
     """
     n = p_idx.shape[0]
     nc = dc_idx.shape[0]
@@ -91,15 +329,13 @@ def advance(
     nodes = x.shape[0]
     width = window[1]
     inv2dt = 0.5 / dt
-    invdt = 1.0 / dt
     invdt2 = 1.0 / (dt * dt)
-    dt2 = dt * dt
     q1 = np.empty(n)
     fc = np.empty(nc)
     wl = np.empty(nc)
     rc = np.empty(nc)
-    top = np.empty(nc)
-    flex = np.empty(nc)
+    top = np.empty(nc)  # mean rail top under the contact's axles
+    flex = np.empty(nc)  # mean local flexibility
     vfree = np.empty(nw)
     rhs = np.empty(nw)
     v = np.zeros(nw)
@@ -107,7 +343,6 @@ def advance(
     f_down = np.empty(nw)
     F = np.zeros(nw)
     state = np.zeros(nw, np.int64)
-    W = np.empty(na)
     shape = np.empty((na, 4))
     fw = np.empty((2, width))
     fm = np.empty((2, width))
@@ -120,116 +355,21 @@ def advance(
         while i0 + width + 1 < nodes and x[i0 + 1] <= centre[s] + rear - margin:
             i0 += 1
         window[0] = i0
-        # wheel-rail forces
-        for c in range(nc):
-            top[c] = 0.0  # mean rail top under the contact's axles
-            flex[c] = 0.0  # mean local flexibility
-            rc[c] = 0.0
-        for a in range(na):
-            c = ax_contact[a]
-            r = ax_rail[a]
-            xa = centre[s] + ax_off[a]
-            e = ax_el[a]
-            while e + 2 < nodes and x[e + 1] <= xa:
-                e += 1
-            ax_el[a] = e
-            L = x[e + 1] - x[e]
-            t = (xa - x[e]) / L
-            t2 = t * t
-            t3 = t2 * t
-            shape[a, 0] = 1.0 - 3.0 * t2 + 2.0 * t3
-            shape[a, 1] = L * (t - 2.0 * t2 + t3)
-            shape[a, 2] = 3.0 * t2 - 2.0 * t3
-            shape[a, 3] = L * (t3 - t2)
-            u = (shape[a, 0] * (track[0, r, e] - rest_w[r, e])
-                 + shape[a, 1] * (track[1, r, e] - rest_th[r, e])
-                 + shape[a, 2] * (track[0, r, e + 1] - rest_w[r, e + 1])
-                 + shape[a, 3] * (track[1, r, e + 1] - rest_th[r, e + 1]))  # fmt: skip
-            pa = t * L
-            pb = L - pa
-            flex[c] += pa * pa * pa * pb * pb * pb / (3.0 * EI * L * L * L) / per_contact[c]
-            top[c] += (r_in[s, a] + u) / per_contact[c]
-            rc[c] += r_in[s, a] / per_contact[c]
-        for c in range(nc):
-            dq = 0.0
-            for j in range(dc_idx.shape[1]):
-                dq += dc_val[c, j] * z[dc_idx[c, j]]
-            delta = dq - top[c] + static_load / hertz
-            wl[c] = delta / (1.0 / hertz + flex[c]) if delta > 0.0 else 0.0
-            fc[c] = per_contact[c] * (wl[c] - static_load)
-        for a in range(na):
-            W[a] = wl[ax_contact[a]]
-        # vehicle
+        wheel_loads(
+            centre[s], r_in[s], ax_off, ax_contact, ax_rail, per_contact, x, track, rest_w,
+            rest_th, EI, dc_idx, dc_val, z, static_load, hertz, ax_el, shape, top, flex, rc,
+            wl, fc,
+        )  # fmt: skip
         if not vehicle_step(
             p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dw_idx, dw_val, H, jinv, wedge,
             z, fc, inv2dt, max_iter, q1, vfree, rhs, v, f_up, f_down, F, state,
         ):  # fmt: skip
             return NEWTON_FAILED, s
-        # track: forces on the window's nodes
-        for r in range(2):
-            for k in range(width):
-                fw[r, k] = 0.0
-                fm[r, k] = 0.0
-            for e in range(i0 - 1, i0 + width):
-                if e < 0 or e + 1 >= nodes:
-                    continue
-                dw = track[0, r, e] - track[0, r, e + 1]
-                t1 = track[1, r, e]
-                t2 = track[1, r, e + 1]
-                f1 = ea[e] * dw + eb[e] * (t1 + t2)
-                m1 = eb[e] * dw + ec4[e] * t1 + ec2[e] * t2
-                m2 = eb[e] * dw + ec2[e] * t1 + ec4[e] * t2
-                k = e - i0
-                if k >= 0:
-                    fw[r, k] -= f1
-                    fm[r, k] -= m1
-                if k + 1 < width:
-                    fw[r, k + 1] += f1
-                    fm[r, k + 1] -= m2
-        for a in range(na):
-            r = ax_rail[a]
-            k = ax_el[a] - i0
-            if 0 <= k and k + 1 < width:
-                fw[r, k] += W[a] * shape[a, 0]
-                fm[r, k] += W[a] * shape[a, 1]
-                fw[r, k + 1] += W[a] * shape[a, 2]
-                fm[r, k + 1] += W[a] * shape[a, 3]
-        for r in range(2):
-            j = 0  # the nearest axle on this rail, from the rear
-            last = 0
-            while last + 1 < rail_axles.shape[1] and rail_axles[r, last + 1] >= 0:
-                last += 1
-            for k in range(width):
-                i = i0 + k
-                while j < last and 2.0 * (x[i] - centre[s]) > (
-                    ax_off[rail_axles[r, j]] + ax_off[rail_axles[r, j + 1]]
-                ):
-                    j += 1
-                w0 = track[0, r, i]
-                zs0 = track[2, r, i]
-                vw = (w0 - track[3, r, i]) * invdt
-                vz = (zs0 - track[5, r, i]) * invdt
-                pad = kp * (w0 - zs0) + cp * (vw - vz)
-                ballast = 0.0
-                pen = zs0 - sgap[r, i]
-                if pen > 0.0:
-                    ballast = kb[r, i] * pen + cb * vz
-                    if ballast < 0.0:
-                        ballast = 0.0
-                a = rail_axles[r, j]
-                if a >= 0 and ballast > peak[a, i]:
-                    peak[a, i] = ballast
-                aw = (fw[r, k] - pad) / mw[i] + gravity
-                at = fm[r, k] / J[i]
-                az = (pad - ballast) / ms + gravity
-                t0 = track[1, r, i]
-                t_prev = track[4, r, i]
-                track[3, r, i] = w0
-                track[4, r, i] = t0
-                track[5, r, i] = zs0
-                track[0, r, i] = w0 + vw * dt + aw * dt2
-                track[1, r, i] = 2.0 * t0 - t_prev + at * dt2
-                track[2, r, i] = zs0 + vz * dt + az * dt2
+        rail_forces(track, ea, eb, ec4, ec2, i0, ax_contact, ax_rail, ax_el, wl, shape, fw, fm)
+        step_nodes(
+            track, fw, fm, i0, centre[s], x, ax_off, rail_axles, mw, J, ms, kp, cp, kb, cb,
+            sgap, gravity, dt, peak,
+        )  # fmt: skip
         if to_store == 0:
             to_store = store_every
             if not store_vehicle(
