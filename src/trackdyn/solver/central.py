@@ -343,6 +343,167 @@ _pending = lanewise("h if g else 0")
 expression written in `advance` or `wedge_step`, in every lane."""
 
 
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy", inline="always")
+def _lane_rows(n, zl, zb, q1, ds_idx, dsv, dc_idx, dcv, cv, cc, fc, half, per_dt2, static,
+               zero, none, out_v_l, out_a_l, out_sec_l, out_wl_l):  # fmt: skip
+    """What `store_vehicle` writes of a stored step, each a row of the lanes: velocities,
+    accelerations, secondary displacements and wheel loads; returns each lane's flag of a
+    displacement not finite."""
+    bad = none
+    for i in range(n):
+        zi, zp, qi = load(zl, i), load(zl, n + i), load(q1, i)
+        bad = _not_finite(bad, load(zb, i), _EXPONENT)
+        store(out_v_l, i, _velocity(half, zp, qi))
+        store(out_a_l, i, _acceleration(per_dt2, zp, qi, zi))
+    for u in range(ds_idx.shape[0]):
+        acc = zero
+        for j in range(ds_idx.shape[1]):
+            acc = _fma(load(dsv, u * ds_idx.shape[1] + j), load(zl, ds_idx[u, j]), acc)
+        store(out_sec_l, u, acc)
+    for c in range(dc_idx.shape[0]):
+        dv = zero
+        for j in range(dc_idx.shape[1]):
+            dv = _fma(load(dcv, c * dc_idx.shape[1] + j), load(out_v_l, dc_idx[c, j]), dv)
+        wl = _wheel_load(load(cv, cc * c), dv, load(fc, c), static, load(cv, cc * c + 1))
+        store(out_wl_l, c, wl)
+    return bad
+
+
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy", inline="always")
+def _lane_free(p_idx, pv, gc_idx, gcv, zl, fc, zero, q1):
+    """The lanes' next displacement without the wedge forces, ``q1 = P z - Gc^T fc``
+    (`vehicle_step`'s)."""
+    for i in range(p_idx.shape[0]):
+        acc = zero
+        for j in range(p_idx.shape[1]):
+            acc = _fma(load(pv, i * p_idx.shape[1] + j), load(zl, p_idx[i, j]), acc)
+        store(q1, i, acc)
+    for c in range(gc_idx.shape[0]):
+        f = load(fc, c)
+        for j in range(gc_idx.shape[1]):
+            row = gc_idx[c, j]
+            store(q1, row, _fms(load(gcv, c * gc_idx.shape[1] + j), f, load(q1, row)))
+
+
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy", inline="always")
+def _lane_wedge_limits(n, dw_idx, dwv, wv, wc, zl, q1, half, zero, vfree, f_up, f_down):
+    """The lanes' wedge velocities without friction ``vfree`` and slip forces ``f_up``,
+    ``f_down`` of a step (`wedge_step`'s)."""
+    for w in range(dw_idx.shape[0]):
+        d, vv = zero, zero
+        for j in range(dw_idx.shape[1]):
+            col = dw_idx[w, j]
+            a = load(dwv, w * dw_idx.shape[1] + j)
+            d = _fma(a, load(zl, col), d)
+            vv = _fma_difference(a, vv, load(q1, col), load(zl, n + col))
+        store(vfree, w, _product(vv, half))
+        normal = _normal(d, load(wv, wc * w))
+        store(f_up, w, _product(normal, load(wv, wc * w + 1)))
+        store(f_down, w, _product(normal, load(wv, wc * w + 2)))
+
+
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy", inline="always")
+def _lane_wedge_forces(gw_idx, gwv, wv, wc, state, v, F, q1):
+    """The lanes' wedge forces ``F`` of the stick/slip states found, and their part of
+    ``q1``, ``- Gw^T F`` (`vehicle_step`'s)."""
+    for w in range(gw_idx.shape[0]):
+        f = _stick_force(load(wv, wc * w + 3), load(F, w), load(state, w), load(v, w))
+        store(F, w, f)
+        for j in range(gw_idx.shape[1]):
+            row = gw_idx[w, j]
+            store(q1, row, _fms(load(gwv, w * gw_idx.shape[1] + j), f, load(q1, row)))
+
+
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy", inline="always")
+def _lane_shift(n, run, q1, zl):
+    """``z = [q1, q0]`` in the running lanes, the others left as they are."""
+    going = load(run, 0)
+    for i in range(n):
+        zi = load(zl, i)
+        store(zl, n + i, _select(going, zi, load(zl, n + i)))
+        store(zl, i, _select(going, load(q1, i), zi))
+
+
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy", inline="always")
+def _lane_rows_arrays(n, nds, nc):
+    """The lanes' rows of a step: ``q1`` and the stored step's velocities, accelerations
+    (n each), secondary displacements (``nds``), wheel loads and contact forces (``nc``
+    each)."""
+    lanes = LANES
+    return (np.empty(n * lanes), np.empty(n * lanes), np.empty(n * lanes),
+            np.empty(nds * lanes), np.empty(nc * lanes), np.empty(nc * lanes))  # fmt: skip
+
+
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy", inline="always")
+def _lane_wedge_arrays(nw):
+    """The lanes' wedge quantities of `_lane_wedge_limits`, the Newton iteration and
+    `_lane_wedge_forces`: free velocities, right-hand sides, velocities, slip forces up and
+    down, forces, states (0 stick, 1 slip in compression, 2 in extension), the stick mask,
+    the inverse of each lane's states ``held`` and those states."""
+    lanes = LANES
+    return (np.empty(nw * lanes), np.empty(nw * lanes), np.zeros(nw * lanes),
+            np.empty(nw * lanes), np.empty(nw * lanes), np.zeros(nw * lanes),
+            np.zeros(nw * lanes, np.int64), np.empty(lanes, np.int64),
+            np.empty(nw * nw * lanes), np.full(lanes, -1, np.int64))  # fmt: skip
+
+
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy", inline="always")
+def _lane_stored(s, bad, due, store_every, run, status, valid):
+    """Which lanes store step ``s`` (``valid``, their next ``due`` step moved on); a lane
+    whose displacement is not finite (``bad``) stops with `NOT_FINITE`. Returns how many
+    store it."""
+    kept = 0
+    for b in range(LANES):
+        valid[b] = 0
+        if due[b] != s:
+            continue
+        due[b] += store_every[b]
+        if run[b] and bad[b]:
+            status[b, 0], status[b, 1] = NOT_FINITE, s
+            run[b] = False
+        valid[b] = run[b]
+        kept += run[b]
+    return kept
+
+
+@njit(cache=True, fastmath=FASTMATH, error_model="numpy", inline="always")
+def _lane_newton(nw, wv, wc, hv, jinv, zero, none, vfree, rhs, v, f_up, f_down, F, state,
+                 mask, jl, held):  # fmt: skip
+    """One Newton pass of the lanes' wedges (`wedge_step`'s): the forces of the stick/slip
+    states, the velocities they give (each lane's inverse of its stick mask, taken where
+    its states changed), the new states. Returns each lane's flag of a changed state."""
+    lanes = LANES
+    m = none
+    for w in range(nw):
+        st = load(state, w)
+        store(F, w, _slip_force(load(f_down, w), st, load(f_up, w)))
+        m = _stick_bit(m, st, 1 << w)
+    store(mask, 0, m)
+    for w in range(nw):
+        r = load(vfree, w)
+        for u in range(nw):
+            r = _fms(load(hv, w * nw + u), load(F, u), r)
+        store(rhs, w, r)
+    if total(_differ(load(held, 0), m)) > 0:
+        for b in range(lanes):  # the lane's inverse, where the loop reads it
+            if held[b] != mask[b]:
+                held[b] = mask[b]
+                for w in range(nw):
+                    for u in range(nw):
+                        jl[(w * nw + u) * lanes + b] = jinv[mask[b], w, u, b]
+    ch = none
+    for w in range(nw):
+        acc = zero
+        for u in range(nw):
+            acc = _fma(load(jl, w * nw + u), load(rhs, u), acc)
+        store(v, w, acc)
+        st = load(state, w)
+        new = _new_state(load(wv, wc * w + 3), load(f_down, w), load(f_up, w), acc)
+        ch = _changed(ch, new, st)
+        store(state, w, new)
+    return ch
+
+
 @njit(cache=True, fastmath=FASTMATH, error_model="numpy", nogil=True)
 def advance_lanes(
     p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dc_idx, dc_val, dw_idx, dw_val,
@@ -382,9 +543,9 @@ def advance_lanes(
     zero = load(np.zeros(lanes), 0)
     none = load(np.zeros(lanes, np.int64), 0)
     every = load(np.ones(lanes, np.int64), 0)
-    q1 = np.empty(n * lanes)
-    out_v_l, out_a_l = np.empty(n * lanes), np.empty(n * lanes)  # the stored steps' rows
-    out_sec_l, out_wl_l = np.empty(ds_idx.shape[0] * lanes), np.empty(nc * lanes)
+    q1, out_v_l, out_a_l, out_sec_l, out_wl_l, fc = _lane_rows_arrays(n, ds_idx.shape[0], nc)
+    vfree, rhs, v, f_up, f_down, F, state, mask, jl, held = _lane_wedge_arrays(nw)
+    run = np.empty(lanes, np.bool_)
     # the stored steps, `STAGED` at a time, a row of the lanes per column of the kept
     # outputs (the others have none), and in which lanes each slot is a stored step
     outs = (out_q, out_v, out_a, out_wl, out_secondary, out_fw, out_vw, out_k, out_r)
@@ -392,22 +553,8 @@ def advance_lanes(
     for a in range(len(outs)):
         offsets[a + 1] = offsets[a] + outs[a].shape[1]
     stage = np.empty((STAGED, offsets[-1], lanes))
-    stage_l = stage.reshape(-1)
-    valid = np.zeros((STAGED, lanes), np.int64)
-    slot = 0
+    stage_l, valid, slot = stage.reshape(-1), np.zeros((STAGED, lanes), np.int64), 0
     written = np.zeros(lanes, np.int64)
-    fc = np.empty(nc * lanes)
-    vfree = np.empty(nw * lanes)
-    rhs = np.empty(nw * lanes)
-    v = np.zeros(nw * lanes)
-    f_up = np.empty(nw * lanes)
-    f_down = np.empty(nw * lanes)
-    F = np.zeros(nw * lanes)
-    state = np.zeros(nw * lanes, np.int64)  # 0 stick, 1 slip in compression, 2 in extension
-    mask = np.empty(lanes, np.int64)
-    jl = np.empty(nw * nw * lanes)  # the inverse of each lane's stick/slip states `held`
-    held = np.full(lanes, -1, np.int64)
-    run = np.empty(lanes, np.bool_)
     due = -step0 % store_every  # each lane's next stored step
     next_due = due.min()
     steps = count.max()
@@ -431,61 +578,15 @@ def advance_lanes(
                     fc[c * lanes + b] -= static_load[b]
             else:
                 store(fc, c, _spring(load(kv, s * nc + c), load(rv, s * nc + c), x))
-        # q1 without the wedge forces
-        for i in range(n):
-            acc = zero
-            for j in range(p_idx.shape[1]):
-                acc = _fma(load(pv, i * p_idx.shape[1] + j), load(zl, p_idx[i, j]), acc)
-            store(q1, i, acc)
-        for c in range(nc):
-            f = load(fc, c)
-            for j in range(gc_idx.shape[1]):
-                row = gc_idx[c, j]
-                store(q1, row, _fms(load(gcv, c * gc_idx.shape[1] + j), f, load(q1, row)))
+        _lane_free(p_idx, pv, gc_idx, gcv, zl, fc, zero, q1)  # q1 without the wedge forces
         if nw > 0:
             # the wedges: free velocities and slip forces (`wedge_step`), then Newton
-            for w in range(nw):
-                d, vv = zero, zero
-                for j in range(dw_idx.shape[1]):
-                    col = dw_idx[w, j]
-                    a = load(dwv, w * dw_idx.shape[1] + j)
-                    d = _fma(a, load(zl, col), d)
-                    vv = _fma_difference(a, vv, load(q1, col), load(zl, n + col))
-                store(vfree, w, _product(vv, half))
-                normal = _normal(d, load(wv, wc * w))
-                store(f_up, w, _product(normal, load(wv, wc * w + 1)))
-                store(f_down, w, _product(normal, load(wv, wc * w + 2)))
+            _lane_wedge_limits(n, dw_idx, dwv, wv, wc, zl, q1, half, zero, vfree, f_up, f_down)
             going = load(run, 0)
             ch, pending = every, 1  # as if every lane's states changed
             for _ in range(max_iter):
-                m = none
-                for w in range(nw):
-                    st = load(state, w)
-                    store(F, w, _slip_force(load(f_down, w), st, load(f_up, w)))
-                    m = _stick_bit(m, st, 1 << w)
-                store(mask, 0, m)
-                for w in range(nw):
-                    r = load(vfree, w)
-                    for u in range(nw):
-                        r = _fms(load(hv, w * nw + u), load(F, u), r)
-                    store(rhs, w, r)
-                if total(_differ(load(held, 0), m)) > 0:
-                    for b in range(lanes):  # the lane's inverse, where the loop reads it
-                        if held[b] != mask[b]:
-                            held[b] = mask[b]
-                            for w in range(nw):
-                                for u in range(nw):
-                                    jl[(w * nw + u) * lanes + b] = jinv[mask[b], w, u, b]
-                ch = none
-                for w in range(nw):
-                    acc = zero
-                    for u in range(nw):
-                        acc = _fma(load(jl, w * nw + u), load(rhs, u), acc)
-                    store(v, w, acc)
-                    st = load(state, w)
-                    new = _new_state(load(wv, wc * w + 3), load(f_down, w), load(f_up, w), acc)
-                    ch = _changed(ch, new, st)
-                    store(state, w, new)
+                ch = _lane_newton(nw, wv, wc, hv, jinv, zero, none, vfree, rhs, v, f_up, f_down, F,
+                                  state, mask, jl, held)  # fmt: skip
                 pending = total(_pending(going, ch))
                 if pending == 0:
                     break
@@ -494,42 +595,11 @@ def advance_lanes(
                     if run[b] and ch[b]:
                         status[b, 0], status[b, 1] = NEWTON_FAILED, s
                         run[b] = False
-            for w in range(nw):
-                f = _stick_force(load(wv, wc * w + 3), load(F, w), load(state, w), load(v, w))
-                store(F, w, f)
-                for j in range(gw_idx.shape[1]):
-                    row = gw_idx[w, j]
-                    store(q1, row, _fms(load(gwv, w * gw_idx.shape[1] + j), f, load(q1, row)))
+            _lane_wedge_forces(gw_idx, gwv, wv, wc, state, v, F, q1)
         if s == next_due:
-            # what `store_vehicle` writes, each a row of the lanes
-            bad = none
-            for i in range(n):
-                zi, zp, qi = load(zl, i), load(zl, n + i), load(q1, i)
-                bad = _not_finite(bad, load(zb, i), _EXPONENT)
-                store(out_v_l, i, _velocity(half, zp, qi))
-                store(out_a_l, i, _acceleration(per_dt2, zp, qi, zi))
-            for u in range(ds_idx.shape[0]):
-                acc = zero
-                for j in range(ds_idx.shape[1]):
-                    acc = _fma(load(dsv, u * ds_idx.shape[1] + j), load(zl, ds_idx[u, j]), acc)
-                store(out_sec_l, u, acc)
-            for c in range(nc):
-                dv = zero
-                for j in range(dc_idx.shape[1]):
-                    dv = _fma(load(dcv, c * dc_idx.shape[1] + j), load(out_v_l, dc_idx[c, j]), dv)
-                wl = _wheel_load(load(cv, cc * c), dv, load(fc, c), static, load(cv, cc * c + 1))
-                store(out_wl_l, c, wl)
-            kept = 0
-            for b in range(lanes):
-                valid[slot, b] = 0
-                if due[b] != s:
-                    continue
-                due[b] += store_every[b]
-                if run[b] and bad[b]:
-                    status[b, 0], status[b, 1] = NOT_FINITE, s
-                    run[b] = False
-                valid[slot, b] = run[b]
-                kept += run[b]
+            bad = _lane_rows(n, zl, zb, q1, ds_idx, dsv, dc_idx, dcv, cv, cc, fc, half, per_dt2,
+                             static, zero, none, out_v_l, out_a_l, out_sec_l, out_wl_l)  # fmt: skip
+            kept = _lane_stored(s, bad, due, store_every, run, status, valid[slot])
             if kept:
                 at = slot * offsets[-1]  # the kept outputs, in the order of `outs`
                 _stage(stage_l, at + offsets[0], zl, 0, out_q.shape[1])
@@ -546,11 +616,7 @@ def advance_lanes(
                     _write_staged(stage, valid, slot, row0, written, outs, offsets)
                     slot = 0
             next_due = due.min()
-        going = load(run, 0)
-        for i in range(n):
-            zi = load(zl, i)
-            store(zl, n + i, _select(going, zi, load(zl, n + i)))
-            store(zl, i, _select(going, load(q1, i), zi))
+        _lane_shift(n, run, q1, zl)
     _write_staged(stage, valid, slot, row0, written, outs, offsets)
 
 
