@@ -22,18 +22,10 @@ import numpy as np
 
 from trackdyn.deterioration.loads import KEPT
 from trackdyn.lanewise import vectorised
-from trackdyn.solver.central import (
-    DONE,
-    LANES,
-    NOT_STARTED,
-    advance,
-    advance_lanes,
-    in_lanes,
-    in_threads,
-    lane_groups,
-    run_matrices,
-    step_matrices,
-)
+from trackdyn.solver.central import in_threads
+from trackdyn.solver.kernel import DONE, NOT_STARTED, advance
+from trackdyn.solver.lanes import LANES, advance_lanes, in_lanes, lane_groups
+from trackdyn.solver.matrices import run_matrices, step_matrices
 from trackdyn.solver.statics import OUTPUTS, widths
 from trackdyn.vehicle.models import MODELS, build_model
 from trackdyn.vehicle.parameters import load_vehicle

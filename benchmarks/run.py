@@ -22,7 +22,8 @@ import numpy as np
 
 from trackdyn.options import RunOptions
 from trackdyn.simulation import simulate, simulate_batch
-from trackdyn.solver.central import DONE, advance, step_matrices
+from trackdyn.solver.kernel import DONE, advance
+from trackdyn.solver.matrices import step_matrices
 from trackdyn.track.synthetic import example_track
 from trackdyn.vehicle.models import MODELS, build_model
 from trackdyn.vehicle.parameters import load_vehicle

@@ -1,6 +1,6 @@
 """Operations on a group of the vector lanes, as tuples of `LANES` values.
 
-`trackdyn.solver.central.advance_lanes` holds each quantity of a step (a displacement, a
+`trackdyn.solver.lanes.advance_lanes` holds each quantity of a step (a displacement, a
 contact force, a wedge's state) of its `LANES` runs as one tuple, and
 `trackdyn.beam.railseat` each entry of the banded solve of its `LANES` wheel positions:
 read with `load` from a flat array, one row of `LANES` values after the other, combined by
@@ -30,7 +30,7 @@ LANES = 8
 a compile-time constant, so that an operation on a group is a fixed number of
 instructions (8 doubles: two of the 256-bit registers LLVM prefers on AVX-512 machines).
 A group of runs costs as much with fewer lanes filled, so a few runs left over go one by
-one (`trackdyn.solver.central.MIN_LANE_RUNS`); with 4 lanes, 8 runs cost more (see the
+one (`trackdyn.solver.lanes.MIN_LANE_RUNS`); with 4 lanes, 8 runs cost more (see the
 benchmarks)."""
 
 FASTMATH = {"nnan", "ninf", "nsz", "contract", "afn"}

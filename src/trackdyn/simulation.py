@@ -25,7 +25,7 @@ from trackdyn.options import RunOptions
 from trackdyn.progress import progress_bar
 from trackdyn.results import make_dataset
 from trackdyn.solver import OUTPUTS, Problem, discrete, solve
-from trackdyn.solver.central import STEPS_PER_PERIOD, highest_frequency
+from trackdyn.solver.matrices import STEPS_PER_PERIOD, highest_frequency
 from trackdyn.solver.statics import widths
 from trackdyn.track.discrete import DiscreteTrack, discrete_track
 from trackdyn.track.inputs import ContactInput
@@ -256,7 +256,7 @@ def simulate_batch(
 
     Runs of the same model and solver go through the solver together (one compiled call
     per block of steps, the runs side by side in the vector lanes,
-    `trackdyn.solver.central.advance_lanes`); each run's results are those it gives alone,
+    `trackdyn.solver.lanes.advance_lanes`); each run's results are those it gives alone,
     to the bit. A run that cannot be made or fails (bad time step, Newton) comes
     back as its `trackdyn.errors.Failure` and does not stop the others.
 

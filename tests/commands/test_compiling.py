@@ -37,9 +37,9 @@ def test_every_kernel_named_is_a_compiled_function_of_its_file():
 def test_the_cache_folder_is_numbas():
     # where numba's cache of a kernel says it keeps it (under this session's NUMBA_CACHE_DIR)
     from trackdyn.beam import railseat
-    from trackdyn.solver import central
+    from trackdyn.solver import kernel
 
-    for module, function in ((central, "advance"), (railseat, "_window_solve")):
+    for module, function in ((kernel, "advance"), (railseat, "_window_solve")):
         kept = Path(getattr(module, function)._cache.cache_path)
         assert kept == cache_folder(Path(module.__file__)), function
 

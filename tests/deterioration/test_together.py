@@ -1,7 +1,7 @@
 """Sections stepped together (`run_group`) give, to the bit, what each gives alone.
 
 Their vehicle runs share batches of the solver, so that runs of different sections go
-side by side in the vector lanes (`trackdyn.solver.central.lane_groups`); a run's result
+side by side in the vector lanes (`trackdyn.solver.lanes.lane_groups`); a run's result
 does not depend on the other runs of its batch, so each section's Dataset must be
 identical to the one it gives alone (`run_section`), and a section that fails stops
 alone.
@@ -19,7 +19,7 @@ from trackdyn.errors import Failure, Status, TrackdynNumericalError
 from trackdyn.io import write_geometry, write_supports
 from trackdyn.options import RunOptions
 from trackdyn.parallel import groups, run_tasks
-from trackdyn.solver import central
+from trackdyn.solver import central, lanes
 from trackdyn.track.synthetic import SoftSpot, synthetic_track
 from trackdyn.vehicle.parameters import load_vehicle
 
@@ -64,7 +64,7 @@ def test_sections_stepped_together_give_what_each_gives_alone(tasks, monkeypatch
 
     monkeypatch.setattr(central, "solve", counted)
     together = run_group(tasks)
-    in_lanes = [b for b in batches if b >= central.MIN_LANE_RUNS]
+    in_lanes = [b for b in batches if b >= lanes.MIN_LANE_RUNS]
     assert in_lanes, batches  # the lanes were used
     for result, task in zip(together, tasks, strict=True):
         alone = run_section(task)

@@ -1,8 +1,8 @@
 """Runs side by side in the vector lanes give, to the bit, what each run gives alone.
 
-A run alone goes through the per-run loop (`central.advance`), each full group of `LANES`
-runs of one model through the lanes (`central.advance_lanes`), and the runs left over
-either in a group with idle lanes (`central.MIN_LANE_RUNS` or more) or one by one: the
+A run alone goes through the per-run loop (`kernel.advance`), each full group of `LANES`
+runs of one model through the lanes (`lanes.advance_lanes`), and the runs left over
+either in a group with idle lanes (`lanes.MIN_LANE_RUNS` or more) or one by one: the
 same scheme, the same sums in the same order, so the stored arrays must be equal bit for
 bit (not merely close).
 """
@@ -17,7 +17,7 @@ from trackdyn import simulation
 from trackdyn.errors import Failure
 from trackdyn.options import RunOptions
 from trackdyn.simulation import run_batch
-from trackdyn.solver import central
+from trackdyn.solver import central, lanes
 from trackdyn.track.inputs import ContactInput
 from trackdyn.track.synthetic import synthetic_track
 from trackdyn.vehicle.models import MODELS
@@ -98,15 +98,15 @@ def test_two_groups_of_lanes(lin):
 
 
 def test_the_runs_left_over_go_in_lanes_or_one_by_one():
-    m, lanes = central.MIN_LANE_RUNS, central.LANES
-    assert central.lane_groups(m - 1).size == 0  # one by one
-    take = central.lane_groups(lanes + m)  # a full group, and m runs with idle lanes
-    np.testing.assert_array_equal(take[0], np.arange(lanes))
-    np.testing.assert_array_equal(take[1], np.r_[lanes : lanes + m, [-1] * (lanes - m)])
-    np.testing.assert_array_equal(central.lane_groups(lanes + m - 1), [np.arange(lanes)])
+    m, width = lanes.MIN_LANE_RUNS, central.LANES
+    assert lanes.lane_groups(m - 1).size == 0  # one by one
+    take = lanes.lane_groups(width + m)  # a full group, and m runs with idle lanes
+    np.testing.assert_array_equal(take[0], np.arange(width))
+    np.testing.assert_array_equal(take[1], np.r_[width : width + m, [-1] * (width - m)])
+    np.testing.assert_array_equal(lanes.lane_groups(width + m - 1), [np.arange(width)])
 
 
-@pytest.mark.parametrize("runs", [central.MIN_LANE_RUNS, central.LANES + central.LANES - 1])
+@pytest.mark.parametrize("runs", [lanes.MIN_LANE_RUNS, central.LANES + central.LANES - 1])
 @pytest.mark.parametrize("model", ["2dof", "11dof"])
 def test_a_group_with_idle_lanes(lin, model, runs):
     # the idle lanes hold a copy of the last run and are never advanced: the runs are

@@ -17,12 +17,12 @@ import sys
 from pathlib import Path
 
 KERNELS: dict[str, tuple[tuple[str, str], ...]] = {
-    "run": (("solver/central.py", "advance"),),
-    "study": (("solver/central.py", "advance_lanes"),),
-    "deteriorate": (("solver/central.py", "advance"), ("beam/railseat.py", "_window_solve")),
-    "calibrate": (("solver/central.py", "advance"), ("beam/railseat.py", "_window_solve")),
+    "run": (("solver/kernel.py", "advance"),),
+    "study": (("solver/lanes.py", "advance_lanes"),),
+    "deteriorate": (("solver/kernel.py", "advance"), ("beam/railseat.py", "_window_solve")),
+    "calibrate": (("solver/kernel.py", "advance"), ("beam/railseat.py", "_window_solve")),
     "interventions": (
-        ("solver/central.py", "advance_lanes"),
+        ("solver/lanes.py", "advance_lanes"),
         ("beam/railseat.py", "_window_solve"),
     ),
 }

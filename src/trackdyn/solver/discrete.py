@@ -1,6 +1,6 @@
 """A vehicle model on the discrete track (`trackdyn.track.discrete`), one compiled loop.
 
-The vehicle advances as in `trackdyn.solver.central` (central differences, implicit in its
+The vehicle advances as in `trackdyn.solver.kernel` (central differences, implicit in its
 dampers and wedges, explicit in the contact forces); the track by central differences with
 its lumped masses, explicit in all its forces (the damping forces from the backward
 difference of the velocity). Each wheel meets its rail through a linearised Hertz spring
@@ -43,15 +43,9 @@ from numba import njit
 
 from trackdyn.beam.elements import element_stiffness, hermite
 from trackdyn.errors import TrackdynInputError
-from trackdyn.solver.central import (
-    CHUNK_STEPS,
-    DONE,
-    NEWTON_FAILED,
-    NOT_FINITE,
-    step_matrices,
-    store_vehicle,
-    vehicle_step,
-)
+from trackdyn.solver.central import CHUNK_STEPS
+from trackdyn.solver.kernel import DONE, NEWTON_FAILED, NOT_FINITE, store_vehicle, vehicle_step
+from trackdyn.solver.matrices import step_matrices
 from trackdyn.solver.statics import failure, non_finite, widths
 from trackdyn.track.discrete import hertz_stiffness
 from trackdyn.track.track import RAILS
@@ -319,7 +313,7 @@ def advance(
     axle's element (a search start); ``gravity`` [m/s²]. ``peak`` (axles, nodes) collects
     the largest sleeper-ballast force [N] of each sleeper while each axle is the nearest
     on its rail (``rail_axles`` (2, k): each rail's axles from the rear, -1 padded). A step:
-    the wheel loads (`wheel_loads`), the vehicle (`trackdyn.solver.central.vehicle_step`),
+    the wheel loads (`wheel_loads`), the vehicle (`trackdyn.solver.kernel.vehicle_step`),
     the forces on the rail (`rail_forces`), the window's nodes (`step_nodes`), the outputs.
     """
     n = p_idx.shape[0]
