@@ -123,26 +123,27 @@ class Deterioration(_Solved):
 
     Attributes
     ----------
+    tasks : list of trackdyn.deterioration.runs.SectionTask
+        Each section's loop, as the scenario makes it.
     results : list of xarray.Dataset or None
         A Dataset per section (``deterioration_<section>.nc``), once `solve` is called.
     """
 
     path: str | Path | None = None
+    tasks: Any = dataclasses.field(default=None, init=False, repr=False)
     results: Any = dataclasses.field(default=None, init=False, repr=False)
 
-    @classmethod
-    def from_file(cls, path=None) -> Deterioration:
-        """The scenario of ``path`` (None: the built-in example), checked now."""
-        made = cls(path)
-        made._tasks()
-        return made
-
-    def _tasks(self):
+    def __post_init__(self):
         from trackdyn.commands.deteriorate.scenario import load_deterioration
         from trackdyn.commands.deteriorate.sections import section_tasks
 
         spec, base = load_deterioration(self.path)
-        return section_tasks(spec, base)
+        self.tasks = section_tasks(spec, base)
+
+    @classmethod
+    def from_file(cls, path=None) -> Deterioration:
+        """The scenario of ``path`` (None: the built-in example), checked now."""
+        return cls(path)
 
     def solve(self, workers: int | None = None, scheduler: str | None = None,
               progress: bool = False) -> Deterioration:  # fmt: skip
@@ -152,7 +153,7 @@ class Deterioration(_Solved):
         from trackdyn.errors import require_workers
 
         require_workers(workers)
-        self.results = run_sections(self._tasks(), workers=workers, scheduler=scheduler,
+        self.results = run_sections(self.tasks, workers=workers, scheduler=scheduler,
                                     progress=progress)  # fmt: skip
         return self
 
