@@ -62,3 +62,38 @@ def test_vectorised_restores_numbas_setting():
         assert numba.config.SLP_VECTORIZE == 1
         raise RuntimeError
     assert numba.config.SLP_VECTORIZE == before
+
+
+_twice_plus = lanewise("b + 2.0 * a")
+
+
+def _scaled_sum(a, out, zero):
+    """Each row of ``out`` twice the row of ``a`` plus the row before; the lanes' total of
+    row 0."""
+    acc = zero
+    for r in range(a.size // len(zero)):
+        acc = _twice_plus(load(a, r), acc)
+        store(out, r, acc)
+    return total(load(out, 0))
+
+
+_written = njit(inline="never")(_scaled_sum)
+
+
+def test_widened_makes_a_function_for_one_lane():
+    # the same function, written once on tuples of LANES values and made for one value:
+    # each lane's column of the group's result is what the one-lane copy gives on that
+    # lane's column alone (the same operations in the same order: equal to the bit)
+    from trackdyn.lanewise import widened
+
+    one = widened({**globals(), "_written": _written}, ("_written",), 1)["_written"]
+    rng = np.random.default_rng(3)
+    rows = 5
+    a = rng.normal(size=rows * LANES)
+    out = np.empty(rows * LANES)
+    _written(a, out, (0.0,) * LANES)
+    for b in range(LANES):
+        alone = np.empty(rows)
+        first = one(np.ascontiguousarray(a.reshape(rows, LANES)[:, b]), alone, (0.0,))
+        np.testing.assert_array_equal(alone, out.reshape(rows, LANES)[:, b])
+        assert first == alone[0]

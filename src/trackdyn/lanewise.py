@@ -18,7 +18,9 @@ turns it on while a loop is compiled.
 
 from __future__ import annotations
 
+import functools
 import re
+import types
 from contextlib import contextmanager
 
 import numba
@@ -38,47 +40,86 @@ FASTMATH = {"nnan", "ninf", "nsz", "contract", "afn"}
 done in the same order alone and in the lanes (the same results, to the bit)."""
 
 _OPERAND = re.compile(r"\b([a-z])\b")
+_SCALAR = re.compile(r"\b([A-Z])\b")
 
 
 def _compiled(source: str):
     """The numba function (inlined into its callers) defined by ``source``."""
-    namespace: dict = {"np": np, "LANES": LANES}
+    namespace: dict = {"np": np}
     exec(source, namespace)  # noqa: S102 - the source is built in this module only
-    (function,) = (v for k, v in namespace.items() if k not in ("np", "LANES", "__builtins__"))
+    (function,) = (v for k, v in namespace.items() if k not in ("np", "__builtins__"))
     return njit(inline="always", fastmath=FASTMATH, error_model="numpy")(function)
 
 
-def lanewise(expression: str):
+@functools.cache
+def lanewise(expression: str, width: int = LANES):
     """A numba function applying the scalar ``expression`` in every lane.
 
-    Its one-letter lower-case names are the operands, tuples of `LANES` values, passed in
-    alphabetical order; upper-case names are scalars, the same in every lane, passed after
-    them (``lanewise("c + a * b")(a, b, c)``; ``lanewise("m + (K if s == 0 else 0)")(m, s,
-    K)``). The result is a tuple of `LANES` values.
+    Its one-letter lower-case names are the operands, tuples of ``width`` values, passed
+    in alphabetical order; upper-case names are scalars, the same in every lane, passed
+    after them (``lanewise("c + a * b")(a, b, c)``; ``lanewise("m + (K if s == 0 else
+    0)")(m, s, K)``). The result is a tuple of ``width`` values. The function keeps its
+    expression (``lane_expression``), so that `widened` can make it at another width.
     """
     lanes = sorted(set(_OPERAND.findall(expression)))
-    scalars = sorted(set(re.findall(r"\b([A-Z])\b", expression)))
-    terms = ", ".join(_OPERAND.sub(rf"\1[{b}]", expression) for b in range(LANES))
-    return _compiled(f"def lanewise({', '.join(lanes + scalars)}):\n    return ({terms},)\n")
+    scalars = sorted(set(_SCALAR.findall(expression)))
+    terms = ", ".join(_OPERAND.sub(rf"\1[{b}]", expression) for b in range(width))
+    function = _compiled(f"def lanewise({', '.join(lanes + scalars)}):\n    return ({terms},)\n")
+    function.lane_expression = expression
+    return function
 
 
-load = _compiled(
-    "def load(a, r):\n    k = np.uint64(r) * np.uint64(LANES)\n    return ("
-    + ", ".join(f"a[k + np.uint64({b})]" for b in range(LANES))
-    + ",)\n"
-)
+@functools.cache
+def rows(width: int = LANES) -> dict:
+    """``load``, ``store`` and ``total`` for tuples of ``width`` values (`load`, `store`,
+    `total` are those of `LANES`)."""
+    values = ", ".join(f"a[k + np.uint64({b})]" for b in range(width))
+    stores = "".join(f"    a[k + np.uint64({b})] = t[{b}]\n" for b in range(width))
+    row = f"    k = np.uint64(r) * np.uint64({width})\n"
+    return {
+        "load": _compiled(f"def load(a, r):\n{row}    return ({values},)\n"),
+        "store": _compiled(f"def store(a, r, t):\n{row}{stores}"),
+        "total": _compiled(
+            f"def total(t):\n    return {' + '.join(f't[{b}]' for b in range(width))}\n"
+        ),
+    }
+
+
+load = rows()["load"]
 """``load(a, r)``: row ``r`` of the flat array ``a`` of rows of `LANES` values, as a
 tuple. ``r`` is not negative: taken unsigned, it is used without numba's check for
 indices from the end, and a flat array's rows without a multiplication by its width."""
 
-store = _compiled(
-    "def store(a, r, t):\n    k = np.uint64(r) * np.uint64(LANES)\n"
-    + "".join(f"    a[k + np.uint64({b})] = t[{b}]\n" for b in range(LANES))
-)
+store = rows()["store"]
 """``store(a, r, t)``: the tuple ``t`` into row ``r`` of the flat array ``a`` (`load`)."""
 
-total = _compiled("def total(t):\n    return " + " + ".join(f"t[{b}]" for b in range(LANES)) + "\n")
+total = rows()["total"]
 """``total(t)``: the sum of the lanes' values of the tuple ``t``."""
+
+
+def widened(namespace: dict, names: tuple[str, ...], width: int) -> dict:
+    """The numba functions ``names`` of a module (its globals ``namespace``), written on
+    the tuples of `LANES` values, made for tuples of ``width`` values.
+
+    Each is a copy of its Python function whose globals have every tuple operation
+    (`lanewise`, `load`, `store`, `total`) at ``width`` and each other function of
+    ``names`` as its copy; compiled with the same numba options (inlined where the original
+    is), so that a function written once serves a group of lanes and a run alone (width 1).
+    """
+    space = dict(namespace)
+    for key, value in namespace.items():
+        if hasattr(value, "lane_expression"):
+            space[key] = lanewise(value.lane_expression, width)
+        elif any(value is f for f in (load, store, total)):
+            space[key] = rows(width)[value.__name__]
+    made = {}
+    for name in names:
+        original = namespace[name]
+        func = original.py_func
+        copy = types.FunctionType(func.__code__, space, func.__name__, func.__defaults__)
+        options = {k: v for k, v in original.targetoptions.items() if k != "nopython"}
+        made[name] = space[name] = njit(**options)(copy)
+    return made
 
 
 @contextmanager

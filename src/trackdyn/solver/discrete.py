@@ -47,9 +47,13 @@ from trackdyn.solver.central import CHUNK_STEPS
 from trackdyn.solver.kernel import DONE, NEWTON_FAILED, NOT_FINITE, store_vehicle, vehicle_step
 from trackdyn.solver.matrices import step_matrices
 from trackdyn.solver.statics import failure, non_finite, widths
+from trackdyn.solver.step import ALONE
 from trackdyn.track.discrete import hertz_stiffness
 from trackdyn.track.track import RAILS
 from trackdyn.units import GRAVITY
+
+_wedge_arrays = ALONE["wedge_arrays"]
+"""The vehicle step's wedge arrays for a run alone (`trackdyn.solver.step.wedge_arrays`)."""
 
 STABILITY_FRACTION = 0.8
 """Default time step as a fraction of the explicit scheme's limit ``2 / ω_max`` of the track
@@ -324,19 +328,19 @@ def advance(
     width = window[1]
     inv2dt = 0.5 / dt
     invdt2 = 1.0 / (dt * dt)
+    # the vehicle's arrays flat, as its step takes them (`trackdyn.solver.step`)
+    pv, gcv, gwv = p_val.reshape(-1), gc_val.reshape(-1), gw_val.reshape(-1)
+    dwv, hv, jv, wv = dw_val.reshape(-1), H.reshape(-1), jinv.reshape(-1), wedge.reshape(-1)
+    dsv = ds_val.reshape(-1)
+    outs = (out_q.reshape(-1), out_v.reshape(-1), out_a.reshape(-1),
+            out_secondary.reshape(-1), out_fw.reshape(-1), out_vw.reshape(-1))  # fmt: skip
     q1 = np.empty(n)
     fc = np.empty(nc)
     wl = np.empty(nc)
     rc = np.empty(nc)
     top = np.empty(nc)  # mean rail top under the contact's axles
     flex = np.empty(nc)  # mean local flexibility
-    vfree = np.empty(nw)
-    rhs = np.empty(nw)
-    v = np.zeros(nw)
-    f_up = np.empty(nw)
-    f_down = np.empty(nw)
-    F = np.zeros(nw)
-    state = np.zeros(nw, np.int64)
+    wedges = _wedge_arrays(nw, (0.0,))
     shape = np.empty((na, 4))
     fw = np.empty((2, width))
     fm = np.empty((2, width))
@@ -355,8 +359,8 @@ def advance(
             wl, fc,
         )  # fmt: skip
         if not vehicle_step(
-            p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dw_idx, dw_val, H, jinv, wedge,
-            z, fc, inv2dt, max_iter, q1, vfree, rhs, v, f_up, f_down, F, state,
+            p_idx, pv, gc_idx, gcv, gw_idx, gwv, dw_idx, dwv, hv, jv, wv, z, fc, inv2dt, max_iter,
+            q1, wedges,
         ):  # fmt: skip
             return NEWTON_FAILED, s
         rail_forces(track, ea, eb, ec4, ec2, i0, ax_contact, ax_rail, ax_el, wl, shape, fw, fm)
@@ -367,8 +371,7 @@ def advance(
         if to_store == 0:
             to_store = store_every
             if not store_vehicle(
-                z, q1, F, v, ds_idx, ds_val, inv2dt, invdt2, stored,
-                out_q, out_v, out_a, out_secondary, out_fw, out_vw,
+                z, q1, wedges, ds_idx, dsv, inv2dt, invdt2, stored, *outs,
             ):  # fmt: skip
                 return NOT_FINITE, s
             for c in range(nc):

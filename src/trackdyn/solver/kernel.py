@@ -18,17 +18,18 @@ soon as the states it lands in are the ones it assumed, so the iteration stops t
 starts from the previous step's states and usually needs one solve. The matrices
 ``(I + H diag(C_slope·stick))^-1`` of all ``2^nw`` state combinations are formed once.
 
-This module is the scheme's loop for one run (`advance`) and its per-step helpers; the
-same step for runs side by side in the vector lanes is `trackdyn.solver.lanes`, the
-driver that sends runs through them block by block `trackdyn.solver.central`, the step's
-matrices and time step `trackdyn.solver.matrices`.
+This module is the scheme's loop for one run (`advance`) and the vehicle's step of a run
+alone (`vehicle_step`, `store_vehicle`, which `trackdyn.solver.discrete` shares). The
+step's equations are written once, in `trackdyn.solver.step`, for any number of runs side
+by side: made for one run here, used at the lanes' width by `trackdyn.solver.lanes`. The
+driver that sends runs through them block by block is `trackdyn.solver.central`, the
+step's matrices and time step `trackdyn.solver.matrices`.
 
 References
 ----------
 Fröhling, R.D. (1997). Deterioration of railway track due to dynamic vehicle loading and
 spatially varying track stiffness. PhD thesis, University of Pretoria,
-§5.4, eqs 5.15-5.18 (central
-differences with Newton-Raphson), 5.30-5.33 (friction wedges).
+§5.4, eqs 5.15-5.18 (central differences with Newton-Raphson), 5.30-5.33 (friction wedges).
 
 Bathe, K.J. (1996). Finite Element Procedures. Prentice Hall, Englewood Cliffs, §9.2.1
 (the central difference method and its stability limit Δt < 2/ω_max).
@@ -42,9 +43,7 @@ import numpy as np
 from numba import njit
 
 from trackdyn.lanewise import FASTMATH
-from trackdyn.solver.statics import (
-    contact_table_force,
-)
+from trackdyn.solver.step import ALONE
 
 DONE, NEWTON_FAILED, NOT_FINITE, NOT_STARTED = 0, 1, 2, 3
 """How `advance` ends: all steps done; no Newton solution at a step; a stored
@@ -60,124 +59,59 @@ that a call does not count a reference to each of its arrays, which cost more th
 whole step of the small models (2dof, every 10th step stored: 177 ns a step with the
 counting, 41 without)."""
 
-EXPONENT = 0x7FF0000000000000
-"""Exponent bits of a float64, all set for inf and NaN (a test that ``fastmath`` keeps)."""
+
+_contact_forces = ALONE["contact_forces"]
+_free_displacement = ALONE["free_displacement"]
+_wedge_limits = ALONE["wedge_limits"]
+_newton_pass = ALONE["newton_pass"]
+_wedge_forces = ALONE["wedge_forces"]
+_motion_rows = ALONE["motion_rows"]
+_wheel_loads = ALONE["wheel_loads"]
+_wedge_arrays = ALONE["wedge_arrays"]
+"""`trackdyn.solver.step`'s functions for a run alone (`trackdyn.solver.step.ALONE`)."""
 
 
-@njit(cache=True, inline="always")
-def wedge_step(dw_idx, dw_val, H, jinv, wedge, z, q1, inv2dt, max_iter,
-               vfree, rhs, v, f_up, f_down, F, state):  # fmt: skip
-    """The wedge friction forces ``F`` and velocities ``v`` of a step (Newton, see above).
-
-    ``q1`` is the next displacement without the wedge forces, ``z = [q0, q-1]``; ``state``
-    holds each wedge's stick/slip state from step to step. Returns False if Newton did not
-    converge in ``max_iter`` iterations.
-    """
-    n = q1.shape[0]
+@njit(**STEP_JIT)
+def vehicle_step(p_idx, pv, gc_idx, gcv, gw_idx, gwv, dw_idx, dwv, hv, jv, wv, zl, fc, half,
+                 max_iter, q1, wedges):  # fmt: skip
+    """One run's next displacement ``q1`` from ``z = [q0, q-1]`` (``zl``) and the contact
+    forces ``fc``, all arrays flat (`trackdyn.solver.step`): ``P z - Gc^T fc``, the wedges'
+    limits and Newton iteration, ``- Gw^T F`` (``wedges``: the wedge arrays,
+    `trackdyn.solver.step.wedge_arrays`). Returns False if the Newton iteration did not
+    converge in ``max_iter`` passes."""
+    zero, none = (0.0,), (0,)
+    _free_displacement(p_idx, pv, gc_idx, gcv, zl, fc, zero, q1)
     nw = dw_idx.shape[0]
-    # wedge velocities if no friction acted, v = Dw (q1 - q-1) / 2Δt
-    for w in range(nw):
-        dd = 0.0
-        vv = 0.0
-        for j in range(dw_idx.shape[1]):
-            col = dw_idx[w, j]
-            dd += dw_val[w, j] * z[col]
-            vv += dw_val[w, j] * (q1[col] - z[n + col])
-        vfree[w] = vv * inv2dt
-        normal = wedge[w, 0] + dd
-        if normal < 0.0:
-            normal = 0.0
-        f_up[w] = normal * wedge[w, 1]
-        f_down[w] = normal * wedge[w, 2]
-    converged = False
+    if nw == 0:
+        return True
+    vfree, rhs, v, f_up, f_down, F, state, masks, jl = wedges
+    _wedge_limits(p_idx.shape[0], dw_idx, dwv, wv, zl, q1, (half,), zero, vfree, f_up, f_down)
     for _ in range(max_iter):
-        mask = 0
-        for w in range(nw):
-            if state[w] == 0:
-                F[w] = 0.0
-                mask |= 1 << w
-            elif state[w] == 1:
-                F[w] = f_up[w]
-            else:
-                F[w] = -f_down[w]
-        for w in range(nw):
-            r = vfree[w]
-            for u in range(nw):
-                r -= H[w, u] * F[u]
-            rhs[w] = r
-        same = True
-        for w in range(nw):
-            vv = 0.0
-            for u in range(nw):
-                vv += jinv[mask, w, u] * rhs[u]
-            v[w] = vv
-            f = wedge[w, 3] * vv
-            new = 1 if f > f_up[w] else (2 if f < -f_down[w] else 0)
-            if new != state[w]:
-                same = False
-                state[w] = new
-        if same:
-            converged = True
-            break
-    if not converged:
-        return False
-    for w in range(nw):
-        if state[w] == 0:
-            F[w] = wedge[w, 3] * v[w]
-    return True
+        if not _newton_pass(nw, wv, hv, jv, zero, none, vfree, rhs, v, f_up, f_down, F, state,
+                            masks, jl)[0]:  # fmt: skip
+            _wedge_forces(gw_idx, gwv, wv, zero, v, F, state, q1)
+            return True
+    return False
 
 
 @njit(**STEP_JIT)
-def vehicle_step(p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dw_idx, dw_val, H, jinv,
-                 wedge, z, fc, inv2dt, max_iter, q1, vfree, rhs, v, f_up, f_down, F,
-                 state):  # fmt: skip
-    """The vehicle's next displacement ``q1`` from ``z = [q0, q-1]`` and the contact forces
-    ``fc``: ``P z - Gc^T fc``, then the wedge forces (`wedge_step`) and ``- Gw^T F``.
-    Returns False if the wedges' Newton iteration did not converge."""
-    n = p_idx.shape[0]
-    for i in range(n):
-        acc = 0.0
-        for j in range(p_idx.shape[1]):
-            acc += p_val[i, j] * z[p_idx[i, j]]
-        q1[i] = acc
-    for c in range(gc_idx.shape[0]):
-        f = fc[c]
-        for j in range(gc_idx.shape[1]):
-            q1[gc_idx[c, j]] -= gc_val[c, j] * f
-    nw = dw_idx.shape[0]
-    if nw > 0 and not wedge_step(
-        dw_idx, dw_val, H, jinv, wedge, z, q1, inv2dt, max_iter,
-        vfree, rhs, v, f_up, f_down, F, state,
-    ):  # fmt: skip
-        return False
-    for w in range(nw):
-        f = F[w]
-        for j in range(gw_idx.shape[1]):
-            q1[gw_idx[w, j]] -= gw_val[w, j] * f
-    return True
-
-
-@njit(**STEP_JIT)
-def store_vehicle(z, q1, F, v, ds_idx, ds_val, inv2dt, invdt2, row,
+def store_vehicle(zl, q1, wedges, ds_idx, dsv, half, per_dt2, row,
                   out_q, out_v, out_a, out_secondary, out_fw, out_vw):  # fmt: skip
-    """Write the step's displacement, velocity, acceleration, secondary displacement and
-    wedge force and velocity to row ``row`` of the outputs; False if ``q0`` is not finite."""
+    """Write one run's displacement, velocity, acceleration, secondary displacement and
+    wedge force and velocity of a step to row ``row`` of its flat outputs (of widths n, n,
+    n, secondary, wedges, wedges); False if ``q0`` is not finite."""
     n = q1.shape[0]
-    z_bits = z.view(np.int64)
+    bad = _motion_rows(n, row, zl, zl.view(np.int64), q1, ds_idx, dsv, (half,), (per_dt2,),
+                       (0.0,), (0,), out_v, out_a, out_secondary)  # fmt: skip
+    if bad[0]:
+        return False
     for i in range(n):
-        if z_bits[i] & EXPONENT == EXPONENT:
-            return False
-        out_q[row, i] = z[i]
-        out_v[row, i] = (q1[i] - z[n + i]) * inv2dt
-        out_a[row, i] = (q1[i] - 2.0 * z[i] + z[n + i]) * invdt2
-    for u in range(ds_idx.shape[0]):
-        d = 0.0
-        for j in range(ds_idx.shape[1]):
-            d += ds_val[u, j] * z[ds_idx[u, j]]
-        out_secondary[row, u] = d
-    for w in range(F.shape[0]):
-        out_fw[row, w] = F[w]
-        out_vw[row, w] = v[w]
+        out_q[row * n + i] = zl[i]
+    v, F = wedges[2], wedges[5]
+    nw = F.shape[0]
+    for w in range(nw):
+        out_fw[row * nw + w] = F[w]
+        out_vw[row * nw + w] = v[w]
     return True
 
 
@@ -194,7 +128,8 @@ def advance(
     Contacts are linear, ``f = k (Dc q - r)``, when ``table`` has no rows, and tabulated
     (``f = P(Dc q - r) - Ps``) otherwise. Every ``store_every``-th global step is written
     to the ``out_*`` arrays from their first row on (`OUTPUTS`); the wheel load is
-    ``static_load + (f + c_d Dc v) / axles`` with ``contact`` rows ``(c_d, axles)``.
+    ``static_load + (f + c_d Dc v) / axles`` with ``contact`` rows ``(c_d, axles)``. The
+    step is `trackdyn.solver.step`'s, made for one run (`trackdyn.solver.step.ALONE`).
 
     Returns
     -------
@@ -205,47 +140,42 @@ def advance(
     n = p_idx.shape[0]
     nc = dc_idx.shape[0]
     nw = dw_idx.shape[0]
-    inv2dt = 0.5 / dt
-    invdt2 = 1.0 / (dt * dt)
-    nonlinear = table.shape[0] > 0
+    zero = (0.0,)
+    half, per_dt2 = 0.5 / dt, 1.0 / (dt * dt)
+    # flat, the run's values one after the other (`trackdyn.lanewise.load`)
+    pv, gcv, gwv = p_val.reshape(-1), gc_val.reshape(-1), gw_val.reshape(-1)
+    dcv, dwv, hv, jv = dc_val.reshape(-1), dw_val.reshape(-1), H.reshape(-1), jinv.reshape(-1)
+    wv, kv, rv, cv = wedge.reshape(-1), k_in.reshape(-1), r_in.reshape(-1), contact.reshape(-1)
+    dsv, cc = ds_val.reshape(-1), contact.shape[1]
+    # the tabulated contacts' arrays as a group of one lane's
+    lane_static = np.full(1, static_load)
+    lane_start, lane_step = np.full(1, y_start), np.full(1, y_step)
+    outs = (out_q.reshape(-1), out_v.reshape(-1), out_a.reshape(-1), out_wl.reshape(-1),
+            out_secondary.reshape(-1), out_fw.reshape(-1), out_vw.reshape(-1))  # fmt: skip
+    nonlinear, tv, grid = table.shape[0] > 0, table.reshape(-1), table.shape[-1]
     q1 = np.empty(n)
     fc = np.empty(nc)
-    vfree = np.empty(nw)
-    rhs = np.empty(nw)
-    v = np.zeros(nw)
-    f_up = np.empty(nw)
-    f_down = np.empty(nw)
-    F = np.zeros(nw)
-    state = np.zeros(nw, np.int64)  # 0 stick, 1 slip in compression, 2 slip in extension
+    wedges = _wedge_arrays(nw, zero)
     stored = 0
     to_store = -step0 % store_every  # steps until the next stored one (no modulo per step)
     for s in range(k_in.shape[0]):
-        for c in range(nc):
-            x = 0.0
-            for j in range(dc_idx.shape[1]):
-                x += dc_val[c, j] * z[dc_idx[c, j]]
-            if nonlinear:
-                fc[c] = contact_table_force(table[s, c], y_start, y_step, x - r_in[s, c])
-                fc[c] -= static_load
-            else:
-                fc[c] = k_in[s, c] * (x - r_in[s, c])
+        _contact_forces(s, nc, nonlinear, dc_idx, dcv, z, kv, rv, tv, grid, lane_start, lane_step,
+                        lane_static, zero, fc)  # fmt: skip
         if not vehicle_step(
-            p_idx, p_val, gc_idx, gc_val, gw_idx, gw_val, dw_idx, dw_val, H, jinv, wedge,
-            z, fc, inv2dt, max_iter, q1, vfree, rhs, v, f_up, f_down, F, state,
+            p_idx, pv, gc_idx, gcv, gw_idx, gwv, dw_idx, dwv, hv, jv, wv, z, fc, half, max_iter,
+            q1, wedges,
         ):  # fmt: skip
             return NEWTON_FAILED, s
         if to_store == 0:
             to_store = store_every
             if not store_vehicle(
-                z, q1, F, v, ds_idx, ds_val, inv2dt, invdt2, stored,
-                out_q, out_v, out_a, out_secondary, out_fw, out_vw,
+                z, q1, wedges, ds_idx, dsv, half, per_dt2, stored,
+                outs[0], outs[1], outs[2], outs[4], outs[5], outs[6],
             ):  # fmt: skip
                 return NOT_FINITE, s
+            _wheel_loads(n, nc, stored, dc_idx, dcv, cv, cc, fc, (static_load,), zero, outs[1],
+                         outs[3])  # fmt: skip
             for c in range(nc):
-                dv = 0.0
-                for j in range(dc_idx.shape[1]):
-                    dv += dc_val[c, j] * out_v[stored, dc_idx[c, j]]
-                out_wl[stored, c] = static_load + (fc[c] + contact[c, 0] * dv) / contact[c, 1]
                 out_k[stored, c] = k_in[s, c]
                 out_r[stored, c] = r_in[s, c]
             stored += 1

@@ -4,12 +4,11 @@ vector lanes.
 Runs of one model, in groups of `LANES` (the last with idle lanes when at least
 `MIN_LANE_RUNS` are left over), go side by side through `advance_lanes`: each array
 carries the runs (lanes) along its last, contiguous axis, and each quantity of a step is a
-tuple of the lanes' values, which LLVM packs into vector registers (`trackdyn.lanewise`); a
-lane's stick/slip states, its Newton iteration and its end are selects on its own mask. The
-sums of each lane are done in `trackdyn.solver.kernel.advance`'s order and the loops are
-compiled without reassociation (`FASTMATH`), so a run's results in the lanes are those it
-gives alone, to the bit. The step's phases are numba-inlined helpers that take their sizes
-as arguments (computed inside, they cost the lanes their vectorisation).
+tuple of the lanes' values, which LLVM packs into vector registers (`trackdyn.lanewise`).
+The step is `trackdyn.solver.step`'s, the one a run alone takes in
+`trackdyn.solver.kernel.advance`, at the lanes' width, so that a run's results in
+the lanes are those it gives alone, to the bit; this module adds what a group needs
+besides: each lane's end and status, and the stored steps staged and written lane by lane.
 
 References
 ----------
@@ -24,9 +23,16 @@ import numpy as np
 from numba import njit
 
 from trackdyn.lanewise import FASTMATH, LANES, lanewise, load, store, total
-from trackdyn.solver.kernel import DONE, EXPONENT, NEWTON_FAILED, NOT_FINITE
-from trackdyn.solver.statics import (
-    contact_table_force,
+from trackdyn.solver.kernel import DONE, NEWTON_FAILED, NOT_FINITE
+from trackdyn.solver.statics import table_force_at
+from trackdyn.solver.step import (
+    free_displacement,
+    motion_rows,
+    newton_pass,
+    wedge_arrays,
+    wedge_forces,
+    wedge_limits,
+    wheel_loads,
 )
 
 STAGED = 128
@@ -68,96 +74,11 @@ def _write_staged(stage, valid, slots, row0, written, outs, offsets):
 
 
 _fma = lanewise("c + a * b")
-_fms = lanewise("c - a * b")
-_fma_difference = lanewise("c + a * (p - q)")
-_product = lanewise("a * b")
 _spring = lanewise("k * (x - r)")
-_normal = lanewise("0.0 if d + o < 0.0 else d + o")
-_slip_force = lanewise("(s == 1) * u - (s == 2) * d")
-_stick_bit = lanewise("m + (K if s == 0 else 0)")
-_new_state = lanewise("(c * v > u) + 2 * ((c * v < -d) & (c * v <= u))")
-_changed = lanewise("h | (1 if n != s else 0)")
-_stick_force = lanewise("c * v if s == 0 else f")
 _select = lanewise("x if g else y")
-_differ = lanewise("1 if h != m else 0")
-_not_finite = lanewise("f | (1 if y & E == E else 0)")
-_velocity = lanewise("(q - p) * h")
-_acceleration = lanewise("(q - 2.0 * z + p) * h")
-_wheel_load = lanewise("l + (f + a * d) / x")
 _pending = lanewise("h if g else 0")
-"""Operations of `advance_lanes` on the tuples of its lanes (`lanewise`): each the
-expression written in `advance` or `wedge_step`, in every lane."""
-
-
-@njit(cache=True, fastmath=FASTMATH, error_model="numpy", inline="always")
-def _lane_rows(n, zl, zb, q1, ds_idx, dsv, dc_idx, dcv, cv, cc, fc, half, per_dt2, static,
-               zero, none, out_v_l, out_a_l, out_sec_l, out_wl_l):  # fmt: skip
-    """What `store_vehicle` writes of a stored step, each a row of the lanes: velocities,
-    accelerations, secondary displacements and wheel loads; returns each lane's flag of a
-    displacement not finite."""
-    bad = none
-    for i in range(n):
-        zi, zp, qi = load(zl, i), load(zl, n + i), load(q1, i)
-        bad = _not_finite(bad, load(zb, i), EXPONENT)
-        store(out_v_l, i, _velocity(half, zp, qi))
-        store(out_a_l, i, _acceleration(per_dt2, zp, qi, zi))
-    for u in range(ds_idx.shape[0]):
-        acc = zero
-        for j in range(ds_idx.shape[1]):
-            acc = _fma(load(dsv, u * ds_idx.shape[1] + j), load(zl, ds_idx[u, j]), acc)
-        store(out_sec_l, u, acc)
-    for c in range(dc_idx.shape[0]):
-        dv = zero
-        for j in range(dc_idx.shape[1]):
-            dv = _fma(load(dcv, c * dc_idx.shape[1] + j), load(out_v_l, dc_idx[c, j]), dv)
-        wl = _wheel_load(load(cv, cc * c), dv, load(fc, c), static, load(cv, cc * c + 1))
-        store(out_wl_l, c, wl)
-    return bad
-
-
-@njit(cache=True, fastmath=FASTMATH, error_model="numpy", inline="always")
-def _lane_free(p_idx, pv, gc_idx, gcv, zl, fc, zero, q1):
-    """The lanes' next displacement without the wedge forces, ``q1 = P z - Gc^T fc``
-    (`vehicle_step`'s)."""
-    for i in range(p_idx.shape[0]):
-        acc = zero
-        for j in range(p_idx.shape[1]):
-            acc = _fma(load(pv, i * p_idx.shape[1] + j), load(zl, p_idx[i, j]), acc)
-        store(q1, i, acc)
-    for c in range(gc_idx.shape[0]):
-        f = load(fc, c)
-        for j in range(gc_idx.shape[1]):
-            row = gc_idx[c, j]
-            store(q1, row, _fms(load(gcv, c * gc_idx.shape[1] + j), f, load(q1, row)))
-
-
-@njit(cache=True, fastmath=FASTMATH, error_model="numpy", inline="always")
-def _lane_wedge_limits(n, dw_idx, dwv, wv, wc, zl, q1, half, zero, vfree, f_up, f_down):
-    """The lanes' wedge velocities without friction ``vfree`` and slip forces ``f_up``,
-    ``f_down`` of a step (`wedge_step`'s)."""
-    for w in range(dw_idx.shape[0]):
-        d, vv = zero, zero
-        for j in range(dw_idx.shape[1]):
-            col = dw_idx[w, j]
-            a = load(dwv, w * dw_idx.shape[1] + j)
-            d = _fma(a, load(zl, col), d)
-            vv = _fma_difference(a, vv, load(q1, col), load(zl, n + col))
-        store(vfree, w, _product(vv, half))
-        normal = _normal(d, load(wv, wc * w))
-        store(f_up, w, _product(normal, load(wv, wc * w + 1)))
-        store(f_down, w, _product(normal, load(wv, wc * w + 2)))
-
-
-@njit(cache=True, fastmath=FASTMATH, error_model="numpy", inline="always")
-def _lane_wedge_forces(gw_idx, gwv, wv, wc, state, v, F, q1):
-    """The lanes' wedge forces ``F`` of the stick/slip states found, and their part of
-    ``q1``, ``- Gw^T F`` (`vehicle_step`'s)."""
-    for w in range(gw_idx.shape[0]):
-        f = _stick_force(load(wv, wc * w + 3), load(F, w), load(state, w), load(v, w))
-        store(F, w, f)
-        for j in range(gw_idx.shape[1]):
-            row = gw_idx[w, j]
-            store(q1, row, _fms(load(gwv, w * gw_idx.shape[1] + j), f, load(q1, row)))
+"""Each lane's ``x`` where its flag ``g`` is set, its ``y`` elsewhere; its ``h`` where
+``g`` is set, 0 elsewhere."""
 
 
 @njit(cache=True, fastmath=FASTMATH, error_model="numpy", inline="always")
@@ -174,23 +95,10 @@ def _lane_shift(n, run, q1, zl):
 def _lane_rows_arrays(n, nds, nc):
     """The lanes' rows of a step: ``q1`` and the stored step's velocities, accelerations
     (n each), secondary displacements (``nds``), wheel loads and contact forces (``nc``
-    each)."""
+    each), one row of `LANES` values each."""
     lanes = LANES
     return (np.empty(n * lanes), np.empty(n * lanes), np.empty(n * lanes),
             np.empty(nds * lanes), np.empty(nc * lanes), np.empty(nc * lanes))  # fmt: skip
-
-
-@njit(cache=True, fastmath=FASTMATH, error_model="numpy", inline="always")
-def _lane_wedge_arrays(nw):
-    """The lanes' wedge quantities of `_lane_wedge_limits`, the Newton iteration and
-    `_lane_wedge_forces`: free velocities, right-hand sides, velocities, slip forces up and
-    down, forces, states (0 stick, 1 slip in compression, 2 in extension), the stick mask,
-    the inverse of each lane's states ``held`` and those states."""
-    lanes = LANES
-    return (np.empty(nw * lanes), np.empty(nw * lanes), np.zeros(nw * lanes),
-            np.empty(nw * lanes), np.empty(nw * lanes), np.zeros(nw * lanes),
-            np.zeros(nw * lanes, np.int64), np.empty(lanes, np.int64),
-            np.empty(nw * nw * lanes), np.full(lanes, -1, np.int64))  # fmt: skip
 
 
 @njit(cache=True, fastmath=FASTMATH, error_model="numpy", inline="always")
@@ -210,44 +118,6 @@ def _lane_stored(s, bad, due, store_every, run, status, valid):
         valid[b] = run[b]
         kept += run[b]
     return kept
-
-
-@njit(cache=True, fastmath=FASTMATH, error_model="numpy", inline="always")
-def _lane_newton(nw, wv, wc, hv, jinv, zero, none, vfree, rhs, v, f_up, f_down, F, state,
-                 mask, jl, held):  # fmt: skip
-    """One Newton pass of the lanes' wedges (`wedge_step`'s): the forces of the stick/slip
-    states, the velocities they give (each lane's inverse of its stick mask, taken where
-    its states changed), the new states. Returns each lane's flag of a changed state."""
-    lanes = LANES
-    m = none
-    for w in range(nw):
-        st = load(state, w)
-        store(F, w, _slip_force(load(f_down, w), st, load(f_up, w)))
-        m = _stick_bit(m, st, 1 << w)
-    store(mask, 0, m)
-    for w in range(nw):
-        r = load(vfree, w)
-        for u in range(nw):
-            r = _fms(load(hv, w * nw + u), load(F, u), r)
-        store(rhs, w, r)
-    if total(_differ(load(held, 0), m)) > 0:
-        for b in range(lanes):  # the lane's inverse, where the loop reads it
-            if held[b] != mask[b]:
-                held[b] = mask[b]
-                for w in range(nw):
-                    for u in range(nw):
-                        jl[(w * nw + u) * lanes + b] = jinv[mask[b], w, u, b]
-    ch = none
-    for w in range(nw):
-        acc = zero
-        for u in range(nw):
-            acc = _fma(load(jl, w * nw + u), load(rhs, u), acc)
-        store(v, w, acc)
-        st = load(state, w)
-        new = _new_state(load(wv, wc * w + 3), load(f_down, w), load(f_up, w), acc)
-        ch = _changed(ch, new, st)
-        store(state, w, new)
-    return ch
 
 
 @njit(cache=True, fastmath=FASTMATH, error_model="numpy", nogil=True)
@@ -276,21 +146,18 @@ def advance_lanes(
     nc = dc_idx.shape[0]
     nw = dw_idx.shape[0]
     lanes = LANES
-    nonlinear = table.shape[0] > 0
     # flat, one row of `LANES` values after the other (`load`, `store`)
     pv, gcv, gwv = p_val.reshape(-1), gc_val.reshape(-1), gw_val.reshape(-1)
-    dcv, dwv, hv = dc_val.reshape(-1), dw_val.reshape(-1), H.reshape(-1)
+    dcv, dwv, hv, jv = dc_val.reshape(-1), dw_val.reshape(-1), H.reshape(-1), jinv.reshape(-1)
     wv, kv, rv, zl = wedge.reshape(-1), k_in.reshape(-1), r_in.reshape(-1), z.reshape(-1)
     dsv, cv, zb = ds_val.reshape(-1), contact.reshape(-1), z.view(np.int64).reshape(-1)
-    wc, cc = wedge.shape[1], contact.shape[1]  # rows of a wedge's and a contact's table
-    inv2dt = 0.5 / dt
-    invdt2 = 1.0 / (dt * dt)
-    half, per_dt2, static = load(inv2dt, 0), load(invdt2, 0), load(static_load, 0)
-    zero = load(np.zeros(lanes), 0)
-    none = load(np.zeros(lanes, np.int64), 0)
+    cc = contact.shape[1]  # a contact's row of its table
+    nonlinear, tv, grid = table.shape[0] > 0, table.reshape(-1), table.shape[-1]
+    half, per_dt2, static = load(0.5 / dt, 0), load(1.0 / (dt * dt), 0), load(static_load, 0)
+    zero, none = load(np.zeros(lanes), 0), load(np.zeros(lanes, np.int64), 0)
     every = load(np.ones(lanes, np.int64), 0)
     q1, out_v_l, out_a_l, out_sec_l, out_wl_l, fc = _lane_rows_arrays(n, ds_idx.shape[0], nc)
-    vfree, rhs, v, f_up, f_down, F, state, mask, jl, held = _lane_wedge_arrays(nw)
+    vfree, rhs, v, f_up, f_down, F, state, masks, jl = wedge_arrays(nw, zero)
     run = np.empty(lanes, np.bool_)
     # the stored steps, `STAGED` at a time, a row of the lanes per column of the kept
     # outputs (the others have none), and in which lanes each slot is a stored step
@@ -311,40 +178,42 @@ def advance_lanes(
             for b in range(lanes):
                 run[b] = status[b, 0] == DONE and s < count[b]
                 next_end = min(next_end, count[b]) if count[b] > s else next_end
+        # the contact forces (`contact_forces`'s, which as a function cost the lanes a third
+        # of their speed)
         for c in range(nc):
             x = zero
             for j in range(dc_idx.shape[1]):
                 x = _fma(load(dcv, c * dc_idx.shape[1] + j), load(zl, dc_idx[c, j]), x)
             if nonlinear:
                 for b in range(lanes):
-                    y = x[b] - r_in[s, c, b]
-                    fc[c * lanes + b] = contact_table_force(
-                        table[s, c, b], y_start[b], y_step[b], y
-                    )
-                    fc[c * lanes + b] -= static_load[b]
+                    at = (s * nc + c) * lanes + b
+                    y = x[b] - rv[at]
+                    f = table_force_at(tv, at * grid, grid, y_start[b], y_step[b], y)
+                    fc[c * lanes + b] = f - static_load[b]
             else:
                 store(fc, c, _spring(load(kv, s * nc + c), load(rv, s * nc + c), x))
-        _lane_free(p_idx, pv, gc_idx, gcv, zl, fc, zero, q1)  # q1 without the wedge forces
+        free_displacement(p_idx, pv, gc_idx, gcv, zl, fc, zero, q1)
         if nw > 0:
-            # the wedges: free velocities and slip forces (`wedge_step`), then Newton
-            _lane_wedge_limits(n, dw_idx, dwv, wv, wc, zl, q1, half, zero, vfree, f_up, f_down)
+            # the wedges: their limits, then Newton while a running lane's states change
+            wedge_limits(n, dw_idx, dwv, wv, zl, q1, half, zero, vfree, f_up, f_down)
             going = load(run, 0)
-            ch, pending = every, 1  # as if every lane's states changed
+            changed, pending = every, 1  # as if every lane's states changed
             for _ in range(max_iter):
-                ch = _lane_newton(nw, wv, wc, hv, jinv, zero, none, vfree, rhs, v, f_up, f_down, F,
-                                  state, mask, jl, held)  # fmt: skip
-                pending = total(_pending(going, ch))
+                changed = newton_pass(nw, wv, hv, jv, zero, none, vfree, rhs, v, f_up, f_down, F,
+                                      state, masks, jl)  # fmt: skip
+                pending = total(_pending(going, changed))
                 if pending == 0:
                     break
             if pending > 0:
                 for b in range(lanes):
-                    if run[b] and ch[b]:
+                    if run[b] and changed[b]:
                         status[b, 0], status[b, 1] = NEWTON_FAILED, s
                         run[b] = False
-            _lane_wedge_forces(gw_idx, gwv, wv, wc, state, v, F, q1)
+            wedge_forces(gw_idx, gwv, wv, zero, v, F, state, q1)
         if s == next_due:
-            bad = _lane_rows(n, zl, zb, q1, ds_idx, dsv, dc_idx, dcv, cv, cc, fc, half, per_dt2,
-                             static, zero, none, out_v_l, out_a_l, out_sec_l, out_wl_l)  # fmt: skip
+            bad = motion_rows(n, 0, zl, zb, q1, ds_idx, dsv, half, per_dt2, zero, none, out_v_l,
+                              out_a_l, out_sec_l)  # fmt: skip
+            wheel_loads(n, nc, 0, dc_idx, dcv, cv, cc, fc, static, zero, out_v_l, out_wl_l)
             kept = _lane_stored(s, bad, due, store_every, run, status, valid[slot])
             if kept:
                 at = slot * offsets[-1]  # the kept outputs, in the order of `outs`

@@ -107,14 +107,21 @@ def wheel_load(model, fc, dv):
 @njit(cache=True, inline="always")
 def contact_table_force(table, y_start, y_step, deflection):
     """Tabulated track force [N] at ``deflection`` [m]: zero before the table, linear after."""
+    return table_force_at(table, 0, table.size, y_start, y_step, deflection)
+
+
+@njit(cache=True, inline="always")
+def table_force_at(values, first, size, y_start, y_step, deflection):
+    """`contact_table_force` of the table ``values[first:first + size]`` (read in place)."""
     if deflection <= y_start:
         return 0.0
     u = (deflection - y_start) / y_step
     j = int(u)
-    last = table.size - 1
+    last = size - 1
     if j >= last:
-        return table[last] + (u - last) * (table[last] - table[last - 1])
-    return table[j] + (u - j) * (table[j + 1] - table[j])
+        at = first + last
+        return values[at] + (u - last) * (values[at] - values[at - 1])
+    return values[first + j] + (u - j) * (values[first + j + 1] - values[first + j])
 
 
 def table_step(grid):
@@ -122,12 +129,16 @@ def table_step(grid):
     return (grid[0], grid[1] - grid[0]) if grid.size else (0.0, 1.0)
 
 
+WEDGE_COLUMNS = 4
+"""Columns of a wedge's row of `wedge_table`."""
+
+
 def wedge_table(model) -> np.ndarray:
     """Per wedge ``x_ss`` [m], the slip force per unit spring compression in compression
     and in extension ``k_ss μ / (tan α_w ∓ μ)`` [N/m], and ``C_slope`` [N s/m]."""
     k_ss, x_ss, mu, tan_a, c_slope = model.wedge_params.T
     wedge = np.column_stack([x_ss, k_ss * mu / (tan_a - mu), k_ss * mu / (tan_a + mu), c_slope])
-    return np.ascontiguousarray(wedge.reshape(-1, 4))
+    return np.ascontiguousarray(wedge.reshape(-1, WEDGE_COLUMNS))
 
 
 def wedge_forces(wedge, d, v):
