@@ -4,12 +4,12 @@ The track model of ``[run] track = "discrete"`` (`trackdyn.solver.discrete` inte
 it with the vehicle). Per rail:
 
 - the rail, an Euler-Bernoulli beam of Hermite cubic elements, one element per sleeper
-  bay, nodes at the sleepers (deflection and rotation), with its mass ``ρA`` and rotary
-  inertia ``ρI`` lumped at the nodes over the tributary length. Euler-Bernoulli is enough
-  below about 500 Hz: shear deformation and rotary inertia (Timoshenko) matter once the
-  bending wavelength nears a few rail heights, above about 500 Hz for a 60E1 rail (its
-  pinned-pinned resonance lies near 1 kHz; Knothe & Grassie 1993). The lumped ``ρI``
-  keeps the rotations explicit and is the rail's own rotary inertia (Rayleigh beam);
+  bay, nodes at the sleepers (deflection and rotation), with its mass ``ρA`` lumped at the
+  nodes over the tributary length and no rotary inertia (the solver condenses the
+  rotations out). Euler-Bernoulli is enough below about 500 Hz: shear deformation and
+  rotary inertia (Timoshenko) matter once the bending wavelength nears a few rail heights,
+  above about 500 Hz for a 60E1 rail (its pinned-pinned resonance lies near 1 kHz; Knothe
+  & Grassie 1993);
 - a rail pad at every sleeper, spring ``kp`` and damper ``cp``, between the rail node and
   the sleeper;
 - a sleeper mass ``Ms`` per rail seat (half a sleeper per rail: the two rails are
@@ -163,7 +163,8 @@ class DiscreteTrack:
     params : DiscreteParameters
         Pad, sleeper, ballast and wheel parameters.
     EI, rail_mass, rail_rotary : float
-        Rail bending stiffness [N m^2], mass [kg/m] and rotary inertia ``ρI`` [kg m].
+        Rail bending stiffness [N m^2], mass [kg/m] and rotary inertia ``ρI`` [kg m] (the
+        rail's; the solver leaves it out, `trackdyn.solver.discrete`).
     rest : ndarray
         Rail deflection, rail rotation and sleeper displacement at rest under self-weight,
         shape (3, 2, nodes) [m, rad, m].
