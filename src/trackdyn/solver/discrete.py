@@ -214,15 +214,12 @@ def rail_forces(track, ea, eb, i0, ax_contact, ax_rail, ax_el, wl, shape, shear,
 
 @njit(**TRACK_JIT)
 def step_nodes(
-    track, fw, shear, i0, xc, x, ax_off, rail_axles, step_w, step_s, kp, cp_dt, kb, cb_dt,
-    sgap, fall, ballast, peak,
+    track, fw, shear, i0, step_w, step_s, kp, cp_dt, kb, cb_dt, sgap, fall, ballast,
 ):  # fmt: skip
     """Advance the window's rail deflections and sleepers one step (central differences).
 
-    The rail deflections and sleepers first, a loop without branches over each rail's
-    window (its arrays as 1D views, which LLVM vectorises; indexed in 3D it did not, and
-    the loop took twice as long), then each node's ballast force into the ``peak`` row of
-    its nearest axle.
+    A loop without branches over each rail's window, its arrays as 1D views, which LLVM
+    vectorises (indexed in 3D they were not, and the loop took twice as long).
 
     Parameters
     ----------
@@ -234,14 +231,6 @@ def step_nodes(
         (`rail_forces`) [N].
     i0 : int
         First node of the window [-].
-    xc : float
-        Position of the vehicle centre [m].
-    x : ndarray, shape (nodes,)
-        Node positions [m].
-    ax_off : ndarray, shape (axles,)
-        Each axle's offset ahead of the centre [m].
-    rail_axles : ndarray, shape (2, k)
-        Each rail's axles from the rear, -1 padded [-].
     step_w : ndarray, shape (nodes,)
         ``Δt² / m`` of each rail node [s²/kg].
     step_s : float
@@ -256,11 +245,9 @@ def step_nodes(
         Seating gap under each sleeper [m].
     fall : float
         Fall under gravity in a step ``g Δt²`` [m].
-    ballast : ndarray, shape (2 rails, window)
-        Work space: each node's sleeper-ballast force [N].
-    peak : ndarray, shape (axles + 1, nodes)
-        Largest sleeper-ballast force [N] of each sleeper while each axle is the nearest on
-        its rail, its last row that of a rail without axles: updated.
+    ballast : ndarray, shape (2 rails, nodes)
+        Largest sleeper-ballast force [N] of each sleeper since it was last handed over
+        (`follow_axles`): updated.
     """
     width = fw.shape[1]
     end = i0 + width
@@ -268,7 +255,7 @@ def step_nodes(
     for r in range(2):
         w, zs = track[0, r, i0:end], track[2, r, i0:end]
         w_prev, zs_prev = track[3, r, i0:end], track[4, r, i0:end]
-        f, sh, k_b, gap, bal = fw[r], shear[r], kb[r, i0:end], sgap[r, i0:end], ballast[r]
+        f, sh, k_b, gap, most = fw[r], shear[r], kb[r, i0:end], sgap[r, i0:end], ballast[r, i0:end]
         for k in range(width):
             w0 = w[k]
             zs0 = zs[k]
@@ -278,27 +265,79 @@ def step_nodes(
             pen = zs0 - gap[k]
             bk = k_b[k] * pen + cb_dt * dz
             bk = bk if pen > 0.0 and bk > 0.0 else 0.0
-            bal[k] = bk
+            most[k] = max(most[k], bk)
             w_prev[k] = w0
             zs_prev[k] = zs0
             w[k] = w0 + dw + (f[k] + sh[k] - sh[k + 1] - pad) * m[k] + fall
             zs[k] = zs0 + dz + (pad - bk) * step_s + fall
-        j = 0  # the nearest axle on this rail, from the rear
-        a = rail_axles[r, 0]  # -1 (a rail without axles): the last row of peak
-        for k in range(width):
-            while (
-                j + 1 < rail_axles.shape[1]
-                and rail_axles[r, j + 1] >= 0
-                and 2.0 * (x[i0 + k] - xc) > ax_off[a] + ax_off[rail_axles[r, j + 1]]
-            ):
-                j += 1
-                a = rail_axles[r, j]
-            peak[a, i0 + k] = max(peak[a, i0 + k], bal[k])
 
 
 @njit(**TRACK_JIT)
-def factor_rotations(ec4, ec2, i0, low, inv_up, up):
-    """Factor the window's rotation stiffness (tridiagonal, ``K_θθ``) as ``L U``.
+def hand_over(r, i, rail_axles, bound, ballast, peak):
+    """Add a sleeper's largest ballast force since its last hand-over to its nearest axle's.
+
+    Parameters
+    ----------
+    r, i : int
+        Rail and node [-].
+    rail_axles : ndarray, shape (2, k)
+        Each rail's axles from the rear, -1 padded [-].
+    bound : ndarray, shape (2, k - 1)
+        Each rail's first node nearer its axle ``j + 1`` than its axle ``j`` [-].
+    ballast : ndarray, shape (2 rails, nodes)
+        Largest sleeper-ballast force since the last hand-over [N]: cleared.
+    peak : ndarray, shape (axles + 1, nodes)
+        Largest sleeper-ballast force [N] of each sleeper while each axle is the nearest on
+        its rail, its last row that of a rail without axles (-1): updated.
+    """
+    j = 0
+    while j + 1 < rail_axles.shape[1] and rail_axles[r, j + 1] >= 0 and bound[r, j] <= i:
+        j += 1
+    a = rail_axles[r, j]
+    peak[a, i] = max(peak[a, i], ballast[r, i])
+    ballast[r, i] = 0.0
+
+
+@njit(**TRACK_JIT)
+def follow_axles(x, xc, ax_off, rail_axles, bound, ballast, peak):
+    """Move each rail's boundaries between neighbouring axles with the vehicle.
+
+    A sleeper nearer the axle behind than before (the boundary has passed it) hands its
+    largest ballast force since its last hand-over to the axle ahead (`hand_over`).
+
+    Parameters
+    ----------
+    x : ndarray, shape (nodes,)
+        Node positions [m].
+    xc : float
+        Position of the vehicle centre [m].
+    ax_off : ndarray, shape (axles,)
+        Each axle's offset ahead of the centre [m].
+    rail_axles, bound, ballast, peak : ndarray
+        As `hand_over`; ``bound`` is moved on (a start at or behind it).
+    """
+    nodes = x.shape[0]
+    for r in range(2):
+        for j in range(bound.shape[1]):
+            ahead = rail_axles[r, j + 1]
+            if ahead < 0:
+                break
+            mid = ax_off[rail_axles[r, j]] + ax_off[ahead]
+            b = bound[r, j]
+            while b < nodes and not 2.0 * (x[b] - xc) > mid:
+                peak[ahead, b] = max(peak[ahead, b], ballast[r, b])
+                ballast[r, b] = 0.0
+                b += 1
+            bound[r, j] = b
+
+
+@njit(**TRACK_JIT)
+def factor_rotations(ec4, ec2, i0, low, high, inv_piv, back):
+    """Factor the window's rotation stiffness (tridiagonal, ``K_θθ``) from both ends.
+
+    A twisted factorisation: Gaussian elimination down from the first node and up from the
+    last meets at the middle one, so that a solve (`solve_rotations`) runs two chains of
+    half the window's length side by side (it took 220 ns a step from one end).
 
     Parameters
     ----------
@@ -310,29 +349,44 @@ def factor_rotations(ec4, ec2, i0, low, inv_up, up):
     Returns
     -------
     None
-        Fills ``low`` (window,) with ``L``'s subdiagonal [-], ``inv_up`` with one over
-        ``U``'s diagonal [1/(N m)] and ``up`` with ``U``'s superdiagonal over its diagonal
-        [-] (Thomas algorithm).
+        Fills, per node of the window (``p`` the middle one), ``low`` with the multiplier of
+        the row above (nodes 1 to ``p``) [-], ``high`` of the row below (nodes ``p`` to the
+        last but one) [-], ``inv_piv`` with one over the pivots [1/(N m)] and ``back`` with
+        the coupling to the node towards ``p`` over the pivot [-] (0 at ``p``).
     """
     width = low.shape[0]
+    p = width // 2
     nodes = ec4.shape[0] + 1
-    u = 0.0
+    low[:] = 0.0
+    high[:] = 0.0
     for k in range(width):
         i = i0 + k
-        d = (ec4[i - 1] if i > 0 else 0.0) + (ec4[i] if i + 1 < nodes else 0.0)
-        low[k] = ec2[i - 1] / u if k > 0 else 0.0
-        u = d - low[k] * ec2[i - 1] if k > 0 else d
-        inv_up[k] = 1.0 / u
-        up[k] = ec2[i] * inv_up[k] if i + 1 < nodes else 0.0
+        inv_piv[k] = (ec4[i - 1] if i > 0 else 0.0) + (ec4[i] if i + 1 < nodes else 0.0)
+    for k in range(p):  # down to the middle
+        if k > 0:
+            low[k] = ec2[i0 + k - 1] * inv_piv[k - 1]
+            inv_piv[k] -= low[k] * ec2[i0 + k - 1]
+        inv_piv[k] = 1.0 / inv_piv[k]
+        back[k] = ec2[i0 + k] * inv_piv[k]
+    for k in range(width - 1, p, -1):  # up to the middle
+        if k < width - 1:
+            high[k] = ec2[i0 + k] * inv_piv[k + 1]
+            inv_piv[k] -= high[k] * ec2[i0 + k]
+        inv_piv[k] = 1.0 / inv_piv[k]
+        back[k] = ec2[i0 + k - 1] * inv_piv[k]
+    low[p] = ec2[i0 + p - 1] * inv_piv[p - 1]
+    high[p] = ec2[i0 + p] * inv_piv[p + 1]
+    inv_piv[p] = 1.0 / (inv_piv[p] - low[p] * ec2[i0 + p - 1] - high[p] * ec2[i0 + p])
+    back[p] = 0.0
 
 
 @njit(**TRACK_JIT)
-def solve_rotations(track, eb, ec2, i0, fm, low, inv_up, up, moment):
+def solve_rotations(track, eb, ec2, i0, fm, low, high, inv_piv, back, moment):
     """The window's rail rotations from its deflections and the wheels' moments.
 
     The rotations carry no inertia (Euler-Bernoulli): at each node the moments of its two
     elements balance the wheels', ``K_θθ θ = M - K_θw w`` (the rotations outside the window
-    held), solved with the factors of `factor_rotations`.
+    held), solved with the factors of `factor_rotations`, both rails and both ends at once.
 
     Parameters
     ----------
@@ -344,13 +398,15 @@ def solve_rotations(track, eb, ec2, i0, fm, low, inv_up, up, moment):
         First node of the window [-].
     fm : ndarray, shape (2 rails, window)
         The wheels' moments on the window's nodes (`rail_forces`) [N m].
-    low, inv_up, up : ndarray, shape (window,)
+    low, high, inv_piv, back : ndarray, shape (window,)
         The factors (`factor_rotations`).
     moment : ndarray, shape (2 rails, window + 1)
         Work space: each element's moment from the deflections (and the held rotations
-        for the two at the window's ends) [N m].
+        for the two at the window's ends) [N m], then the eliminated right-hand side over
+        the pivots [rad].
     """
     width = fm.shape[1]
+    p = width // 2
     first = max(i0 - 1, 0)
     b = eb[first : i0 + width]
     for r in range(2):
@@ -361,20 +417,29 @@ def solve_rotations(track, eb, ec2, i0, fm, low, inv_up, up, moment):
         if i0 > 0:
             moment[r, 0] += ec2[i0 - 1] * track[1, r, i0 - 1]
         moment[r, width] += ec2[i0 + width - 1] * track[1, r, i0 + width]  # inside the rail
-    y0 = 0.0
-    y1 = 0.0
-    for k in range(width):  # forward: L y = M - K_θw w, both rails at once
-        y0 = fm[0, k] - moment[0, k] - moment[0, k + 1] - low[k] * y0
-        y1 = fm[1, k] - moment[1, k] - moment[1, k + 1] - low[k] * y1
-        moment[0, k] = y0 * inv_up[k]
-        moment[1, k] = y1 * inv_up[k]
-    t0 = 0.0
-    t1 = 0.0
-    for k in range(width - 1, -1, -1):  # back: U θ = y
-        t0 = moment[0, k] - up[k] * t0
-        t1 = moment[1, k] - up[k] * t1
-        track[1, 0, i0 + k] = t0
-        track[1, 1, i0 + k] = t1
+        for k in range(width):  # the right-hand side, M - K_θw w
+            moment[r, k] = fm[r, k] - moment[r, k] - moment[r, k + 1]
+    d0 = d1 = u0 = u1 = 0.0  # eliminated down / up, per rail
+    for k in range(p):  # both ends towards the middle; width - 1 - p <= p rows up
+        d0 = moment[0, k] - low[k] * d0
+        d1 = moment[1, k] - low[k] * d1
+        moment[0, k] = d0 * inv_piv[k]
+        moment[1, k] = d1 * inv_piv[k]
+        q = width - 1 - k
+        if q > p:
+            u0 = moment[0, q] - high[q] * u0
+            u1 = moment[1, q] - high[q] * u1
+            moment[0, q] = u0 * inv_piv[q]
+            moment[1, q] = u1 * inv_piv[q]
+    track[1, 0, i0 + p] = (moment[0, p] - low[p] * d0 - high[p] * u0) * inv_piv[p]
+    track[1, 1, i0 + p] = (moment[1, p] - low[p] * d1 - high[p] * u1) * inv_piv[p]
+    for k in range(p - 1, -1, -1):  # out from the middle
+        track[1, 0, i0 + k] = moment[0, k] - back[k] * track[1, 0, i0 + k + 1]
+        track[1, 1, i0 + k] = moment[1, k] - back[k] * track[1, 1, i0 + k + 1]
+        q = width - 1 - k
+        if q > p:
+            track[1, 0, i0 + q] = moment[0, q] - back[q] * track[1, 0, i0 + q - 1]
+            track[1, 1, i0 + q] = moment[1, q] - back[q] * track[1, 1, i0 + q - 1]
 
 
 @njit(cache=True, fastmath=True, error_model="numpy", nogil=True)
@@ -395,7 +460,9 @@ def advance(
     the rearmost axle; ``ax_el`` each axle's element (a search start). ``peak``
     (axles + 1, nodes) collects the largest sleeper-ballast force [N] of each sleeper while
     each axle is the nearest on its rail (``rail_axles`` (2, k): each rail's axles from the
-    rear, -1 padded, which picks the last row). The element and node arrays are those of
+    rear, -1 padded, which picks the last row): each sleeper keeps its largest since it last
+    changed nearest axle, handed over when it changes again, leaves the window or the call
+    ends (`hand_over`, `follow_axles`). The element and node arrays are those of
     `wheel_loads`, `rail_forces`, `step_nodes` and `factor_rotations`. A step: the wheel
     loads, the vehicle (`trackdyn.solver.kernel.vehicle_step`), the forces on the rail,
     the window's deflections and sleepers, its rotations (`solve_rotations`), the outputs.
@@ -426,22 +493,26 @@ def advance(
     fm = np.empty((2, width))
     shear = np.empty((2, width + 1))
     moment = np.empty((2, width + 1))
-    ballast = np.empty((2, width))
+    ballast = np.zeros((2, nodes))  # largest since the last hand-over
+    bound = np.full((2, rail_axles.shape[1] - 1), window[0])
     low = np.empty(width)
-    inv_up = np.empty(width)
-    up = np.empty(width)
+    high = np.empty(width)
+    inv_piv = np.empty(width)
+    back = np.empty(width)
     stored = 0
     to_store = -step0 % store_every
     rear = ax_off.min()
-    factor_rotations(ec4, ec2, window[0], low, inv_up, up)
+    factor_rotations(ec4, ec2, window[0], low, high, inv_piv, back)
     for s in range(centre.shape[0]):
         # the window follows the rearmost axle
         i0 = window[0]
         while i0 + width + 1 < nodes and x[i0 + 1] <= centre[s] + rear - margin:
+            for r in range(2):
+                hand_over(r, i0, rail_axles, bound, ballast, peak)  # it leaves the window
             i0 += 1
         if i0 != window[0]:
             window[0] = i0
-            factor_rotations(ec4, ec2, i0, low, inv_up, up)
+            factor_rotations(ec4, ec2, i0, low, high, inv_piv, back)
         wheel_loads(
             centre[s], r_in[s], ax_off, ax_contact, ax_rail, inv_count, x, inv_len, bend,
             track, rest_w, rest_th, dc_idx, dc_val, z, static_load, hertz, ax_el, shape, top,
@@ -453,11 +524,11 @@ def advance(
         ):  # fmt: skip
             return NEWTON_FAILED, s
         rail_forces(track, ea, eb, i0, ax_contact, ax_rail, ax_el, wl, shape, shear, fw, fm)
+        follow_axles(x, centre[s], ax_off, rail_axles, bound, ballast, peak)
         step_nodes(
-            track, fw, shear, i0, centre[s], x, ax_off, rail_axles, step_w, step_s, kp, cp_dt,
-            kb, cb_dt, sgap, fall, ballast, peak,
+            track, fw, shear, i0, step_w, step_s, kp, cp_dt, kb, cb_dt, sgap, fall, ballast
         )  # fmt: skip
-        solve_rotations(track, eb, ec2, i0, fm, low, inv_up, up, moment)
+        solve_rotations(track, eb, ec2, i0, fm, low, high, inv_piv, back, moment)
         if to_store == 0:
             to_store = store_every
             if not store_vehicle(
@@ -474,6 +545,9 @@ def advance(
         for i in range(n):
             z[n + i] = z[i]
             z[i] = q1[i]
+    for r in range(2):
+        for i in range(window[0], window[0] + width):
+            hand_over(r, i, rail_axles, bound, ballast, peak)
     return DONE, -1
 
 

