@@ -462,7 +462,8 @@ def advance(
     each axle is the nearest on its rail (``rail_axles`` (2, k): each rail's axles from the
     rear, -1 padded, which picks the last row): each sleeper keeps its largest since it last
     changed nearest axle, handed over when it changes again, leaves the window or the call
-    ends (`hand_over`, `follow_axles`). The element and node arrays are those of
+    ends (`hand_over`, `follow_axles`). ``k_in`` holds the point stiffness under each
+    contact of the stored steps only. The element and node arrays are those of
     `wheel_loads`, `rail_forces`, `step_nodes` and `factor_rotations`. A step: the wheel
     loads, the vehicle (`trackdyn.solver.kernel.vehicle_step`), the forces on the rail,
     the window's deflections and sleepers, its rotations (`solve_rotations`), the outputs.
@@ -538,7 +539,7 @@ def advance(
                 return NOT_FINITE, s
             for c in range(nc):
                 out_wl[stored, c] = wl[c]
-                out_k[stored, c] = k_in[s, c]
+                out_k[stored, c] = k_in[stored, c]
                 out_r[stored, c] = rc[c]
             stored += 1
         to_store -= 1
@@ -717,9 +718,10 @@ def solve(
         r_in = np.column_stack(
             [track.geometry.at(RAILS[r], centre + o) for o, r in zip(off, rail, strict=True)]
         )
-        k_in = np.zeros((steps.size, len(inv_count)))
+        kept = centre[-first % p.store_every :: p.store_every]  # the stored steps'
+        k_in = np.zeros((kept.size, len(inv_count)))
         for o, c, r in zip(off, contact, rail, strict=True):
-            k_in[:, c] += np.interp(centre + o, x, point[r])
+            k_in[:, c] += np.interp(kept + o, x, point[r])
         row = (first + p.store_every - 1) // p.store_every
         status, at = advance(
             *mats[:-1], model.static_wheel_load, off, contact, rail, inv_count, hertz,
