@@ -75,8 +75,9 @@ TRACK_JIT: dict[str, Any] = dict(
     cache=True, fastmath=True, error_model="numpy", nogil=True, inline="always"
 )
 """numba options of the phases of `advance`'s step (`wheel_loads`, `rail_forces`,
-`step_nodes`): those of `advance`, and inlined into it by numba, which keeps the loop as fast
-as in one function (LLVM vectorises the same loops; as plain calls, each with its arrays'
+`follow_axles`, `step_nodes`, `solve_rotations`, and `hand_over`, `factor_rotations`):
+those of `advance`, and inlined into it by numba, which keeps the loop as fast as in one
+function (LLVM vectorises the same loops; as plain calls, each with its arrays'
 fields for arguments, the loop took 5 % longer)."""
 
 
