@@ -4,12 +4,12 @@ The track model of ``[run] track = "discrete"`` (`trackdyn.solver.discrete` inte
 it with the vehicle). Per rail:
 
 - the rail, an Euler-Bernoulli beam of Hermite cubic elements, one element per sleeper
-  bay, nodes at the sleepers (deflection and rotation), with its mass ``ρA`` and rotary
-  inertia ``ρI`` lumped at the nodes over the tributary length. Euler-Bernoulli is enough
-  below about 500 Hz: shear deformation and rotary inertia (Timoshenko) matter once the
-  bending wavelength nears a few rail heights, above about 500 Hz for a 60E1 rail (its
-  pinned-pinned resonance lies near 1 kHz; Knothe & Grassie 1993). The lumped ``ρI``
-  keeps the rotations explicit and is the rail's own rotary inertia (Rayleigh beam);
+  bay, nodes at the sleepers (deflection and rotation), with its mass ``ρA`` lumped at the
+  nodes over the tributary length and no rotary inertia (the solver condenses the
+  rotations out). Euler-Bernoulli is enough below about 500 Hz: shear deformation and
+  rotary inertia (Timoshenko) matter once the bending wavelength nears a few rail heights,
+  above about 500 Hz for a 60E1 rail (its pinned-pinned resonance lies near 1 kHz; Knothe
+  & Grassie 1993);
 - a rail pad at every sleeper, spring ``kp`` and damper ``cp``, between the rail node and
   the sleeper;
 - a sleeper mass ``Ms`` per rail seat (half a sleeper per rail: the two rails are
@@ -62,7 +62,7 @@ polyethylene pads: static stiffness about 800 kN/mm).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.linalg import solve_banded
@@ -163,7 +163,8 @@ class DiscreteTrack:
     params : DiscreteParameters
         Pad, sleeper, ballast and wheel parameters.
     EI, rail_mass, rail_rotary : float
-        Rail bending stiffness [N m^2], mass [kg/m] and rotary inertia ``ρI`` [kg m].
+        Rail bending stiffness [N m^2], mass [kg/m] and rotary inertia ``ρI`` [kg m] (the
+        rail's; the solver leaves it out, `trackdyn.solver.discrete`).
     rest : ndarray
         Rail deflection, rail rotation and sleeper displacement at rest under self-weight,
         shape (3, 2, nodes) [m, rad, m].
@@ -211,7 +212,10 @@ class DiscreteTrack:
         """Static state with wheel loads on the rails, self-weight included.
 
         Solved over the nodes ``nodes`` (a slice; default all), free at its ends; the rest
-        state elsewhere.
+        state elsewhere. In one load step of `solve_beam`: its energy, of linear tensionless
+        springs, is convex, so Newton with its line search converges from the unloaded rail
+        (the start of the example's 1 km run: the same state as in ten steps to 2e-18 m, in
+        a third of the time).
 
         Parameters
         ----------
@@ -240,16 +244,18 @@ class DiscreteTrack:
             gap = self.gap[r, part]
             shift = max(0.0, -float(gap.min()))  # a uniform shift keeps gaps >= 0
             supports = linear_supports(x, self.kd[r, part], gap + shift)
+            wheels = np.asarray(axle_x)[mine], np.asarray(load)[mine]
             sol = solve_beam(
-                supports, self.EI, np.r_[x, np.asarray(axle_x)[mine]],
-                np.r_[weight, np.asarray(load)[mine]], max_element=4 * np.max(np.diff(x)),
+                supports, self.EI, np.r_[x, wheels[0]], np.r_[weight, wheels[1]],
+                max_element=4 * np.max(np.diff(x)), load_steps=1,
             )  # fmt: skip
             nodes = np.searchsorted(sol.x, x)
             pad = sol.support_force - p.sleeper_mass * GRAVITY
             w = sol.deflection[nodes] - shift
             state[:, r, part] = w, sol.rotation[nodes], w - pad / p.pad_stiffness
-            if mine.size:
-                rail[mine] = sol.deflection_at(np.asarray(axle_x)[mine]) - shift
+            if mine.size:  # the weights, at the nodes, bend no element between them
+                under = replace(sol, load_position=wheels[0], load=wheels[1])
+                rail[mine] = under.deflection_at(wheels[0]) - shift
         return state, rail
 
 
