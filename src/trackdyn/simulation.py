@@ -123,11 +123,10 @@ def _problem(vehicle, track, o: RunOptions, keep=OUTPUTS, made: dict | None = No
     )
     if o.track == "discrete":
         inputs = given or discrete_track(lin)
-        stable = discrete.stable_step(inputs, m.static_wheel_load)
-        default_dt = min(default_dt, stable)
-        if stable / discrete.STABILITY_FRACTION < limit:
-            limit = stable / discrete.STABILITY_FRACTION
-            omega = 2.0 / limit
+        default_dt = min(default_dt, discrete.stable_step(inputs, m.static_wheel_load))
+        track_limit, track_omega = discrete.stability_limit(inputs, m.static_wheel_load)
+        if track_limit < limit:
+            limit, omega = track_limit, track_omega
     dt = default_dt if o.dt_s is None else o.dt_s
     if dt >= limit:
         raise TrackdynInputError(

@@ -609,6 +609,25 @@ def stable_step(track, static_load: float) -> float:
     return STABILITY_FRACTION * 2.0 / highest_frequency(track, hertz)
 
 
+def stability_limit(track, static_load: float) -> tuple[float, float]:
+    """The explicit scheme's limit on the time step of the track [s] and ``ω_max`` [rad/s].
+
+    The damping forces are explicit (a backward difference), so a mode of frequency ``ω``
+    whose node has damping ``c`` and mass ``m`` is stable while ``ω² Δt² + 2 c Δt / m < 4``
+    (the roots of ``λ² + (a + b - 2) λ + 1 - a`` within the unit circle, ``a = c Δt / m``,
+    ``b = ω² Δt²``): ``Δt < (√(ζ² + 4ω²) - ζ) / ω²`` with ``ζ = c / m``, below ``2 / ω``.
+    ``ζ`` is the larger of a rail node's (the pad's damping on the rail's mass over the
+    shortest bay) and a sleeper's (pad and stiffest ballast damping on its mass), so the
+    limit holds for every window.
+    """
+    p = track.params
+    omega = highest_frequency(track, hertz_stiffness(static_load, p.wheel_radius))
+    bay = float(np.min(np.diff(track.position)))
+    zeta = max(p.pad_damping / (track.rail_mass * bay),
+               (p.pad_damping + p.ballast_damping) / p.sleeper_mass)  # fmt: skip
+    return (np.sqrt(zeta**2 + 4.0 * omega**2) - zeta) / omega**2, omega
+
+
 def _rest_under(track, r, x):
     """Rail deflection of rail ``r`` at rest at positions ``x`` (Hermite interpolation) [m]."""
     nodes = track.position
