@@ -485,8 +485,8 @@ def advance(
     pv, gcv, gwv = p_val.reshape(-1), gc_val.reshape(-1), gw_val.reshape(-1)
     dwv, hv, jv, wv = dw_val.reshape(-1), H.reshape(-1), jinv.reshape(-1), wedge.reshape(-1)
     dsv = ds_val.reshape(-1)
-    outs = (out_q.reshape(-1), out_v.reshape(-1), out_a.reshape(-1),
-            out_secondary.reshape(-1), out_fw.reshape(-1), out_vw.reshape(-1))  # fmt: skip
+    oq, ov, oa = out_q.reshape(-1), out_v.reshape(-1), out_a.reshape(-1)
+    osec, ofw, ovw = out_secondary.reshape(-1), out_fw.reshape(-1), out_vw.reshape(-1)
     q1 = np.empty(n)
     fc = np.empty(nc)
     wl = np.empty(nc)
@@ -538,7 +538,7 @@ def advance(
         if to_store == 0:
             to_store = store_every
             if not store_vehicle(
-                z, q1, wedges, ds_idx, dsv, inv2dt, invdt2, stored, *outs,
+                z, q1, wedges, ds_idx, dsv, inv2dt, invdt2, stored, oq, ov, oa, osec, ofw, ovw,
             ):  # fmt: skip
                 return NOT_FINITE, s
             for c in range(nc):

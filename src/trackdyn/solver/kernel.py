@@ -150,8 +150,10 @@ def advance(
     # the tabulated contacts' arrays as a group of one lane's
     lane_static = np.full(1, static_load)
     lane_start, lane_step = np.full(1, y_start), np.full(1, y_step)
-    outs = (out_q.reshape(-1), out_v.reshape(-1), out_a.reshape(-1), out_wl.reshape(-1),
-            out_secondary.reshape(-1), out_fw.reshape(-1), out_vw.reshape(-1))  # fmt: skip
+    # the outputs flat (each its own variable: an array taken from a tuple in the loop
+    # counts a reference at every stored step, +60 ns a step of the 2-DOF model)
+    oq, ov, oa, owl = out_q.reshape(-1), out_v.reshape(-1), out_a.reshape(-1), out_wl.reshape(-1)
+    osec, ofw, ovw = out_secondary.reshape(-1), out_fw.reshape(-1), out_vw.reshape(-1)
     nonlinear, tv, grid = table.shape[0] > 0, table.reshape(-1), table.shape[-1]
     q1 = np.empty(n)
     fc = np.empty(nc)
@@ -169,12 +171,10 @@ def advance(
         if to_store == 0:
             to_store = store_every
             if not store_vehicle(
-                z, q1, wedges, ds_idx, dsv, half, per_dt2, stored,
-                outs[0], outs[1], outs[2], outs[4], outs[5], outs[6],
+                z, q1, wedges, ds_idx, dsv, half, per_dt2, stored, oq, ov, oa, osec, ofw, ovw,
             ):  # fmt: skip
                 return NOT_FINITE, s
-            _wheel_loads(n, nc, stored, dc_idx, dcv, cv, cc, fc, (static_load,), zero, outs[1],
-                         outs[3])  # fmt: skip
+            _wheel_loads(n, nc, stored, dc_idx, dcv, cv, cc, fc, (static_load,), zero, ov, owl)
             for c in range(nc):
                 out_k[stored, c] = k_in[s, c]
                 out_r[stored, c] = r_in[s, c]
