@@ -124,6 +124,12 @@ class RunOptions(Strict):
         """Vehicle speed [m/s]."""
         return self.speed_kmh / 3.6
 
+    @property
+    def integrator(self) -> str:
+        """The solver that integrates the run (`trackdyn.solver.SOLVERS`): ``"discrete"``
+        on the discrete track, `solver` on the Winkler track."""
+        return "discrete" if self.track == "discrete" else self.solver
+
     def with_(self, **changes) -> RunOptions:
         """A validated copy with some options changed (names and values checked)."""
         return parse(RunOptions, {**self.model_dump(), **changes}, "run options")

@@ -12,10 +12,8 @@ spatially varying track stiffness. PhD thesis, University of Pretoria,
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 import xarray as xr
 
@@ -224,17 +222,8 @@ def run_batch(vehicles: list[Vehicle], tracks, options: list[RunOptions], *,
     if len(vehicles) > 1:
         label = f"{len(vehicles)} runs [steps]"
     with progress_bar(progress, total, label) as bar:
-        # discrete-track runs one per thread (the compiled loop releases the GIL), as many
-        # at once as numba has threads
-        index = [i for i in todo if options[i].track == "discrete"]
-        with ThreadPoolExecutor(max(1, min(len(index), numba.get_num_threads()))) as pool:
-            solved = pool.map(lambda i: discrete.solve(made[i], newton_max_iter, bar.advance),
-                              index)  # fmt: skip
-            for i, out in zip(index, solved, strict=True):
-                results[i] = out if isinstance(out, Exception) else Run(made[i], out)
-        todo = [i for i in todo if options[i].track == "winkler"]
-        for solver in dict.fromkeys(options[i].solver for i in todo):
-            index = [i for i in todo if options[i].solver == solver]
+        for solver in dict.fromkeys(options[i].integrator for i in todo):
+            index = [i for i in todo if options[i].integrator == solver]
             batch = [made[i] for i in index]
             solved = solve(batch, solver, newton_max_iter=newton_max_iter, advanced=bar.advance,
                            keep=keep)  # fmt: skip
