@@ -46,7 +46,7 @@ def test_the_cache_folder_is_numbas():
 
 def test_note_when_an_index_is_missing_or_older_than_its_source(monkeypatch, tmp_path):
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
-    assert compiling_note("run") == "compiling the solver once (about 4 s; cached for later runs)"
+    assert compiling_note("run") == "compiling the solver once (about 7 s; cached for later runs)"
     assert compiling_note("track") is None  # compiles little
     ((file, function),) = KERNELS["run"]
     index = index_file(tmp_path, file, function)
@@ -79,7 +79,7 @@ def shown_with_a_bar(monkeypatch, level: int, terminal: bool, scheduler=None) ->
     return screen.getvalue()
 
 
-NOTE = "compiling the solver once (about 27 s; cached for later runs)"
+NOTE = "compiling the solver once (about 30 s; cached for later runs)"
 
 
 def test_the_note_comes_with_the_bar_on_a_terminal_unless_quiet(monkeypatch, tmp_path):

@@ -33,9 +33,9 @@ every time). ``interventions``: a study of ``kind = "interventions"``. A command
 (track, example) compiles little."""
 
 SECONDS: dict[str, int] = {
-    "run": 4,
-    "study": 27,
-    "deteriorate": 10,
+    "run": 7,
+    "study": 30,
+    "deteriorate": 14,
     "calibrate": 10,
     "interventions": 30,
 }
