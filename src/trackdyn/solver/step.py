@@ -1,6 +1,8 @@
 """The scheme's step (seed eqs 5.15-5.18, 5.30-5.33), written once for any number of runs
-side by side: the contact forces, the vehicle's next displacement with its wedges' Newton
-iteration, and what a stored step keeps.
+side by side: the contact forces, the vehicle's next displacement without the wedges, the
+wedges' slip limits, a pass of their Newton iteration and their forces, and what a stored
+step keeps. The loops around them (a step's Newton passes until the states hold, the
+steps, the stores) are their callers'.
 
 Each function works on the tuples of `trackdyn.lanewise`: a quantity is a tuple of the
 lanes' values (``zero`` and ``none`` are tuples of zeros, float and integer). Written for
