@@ -79,7 +79,8 @@ TRACK_JIT: dict[str, Any] = dict(
     cache=True, fastmath=True, error_model="numpy", nogil=True, inline="always"
 )
 """numba options of the phases of `advance`'s step (`wheel_loads`, `rail_forces`,
-`follow_axles`, `step_nodes`, `solve_rotations`, and `hand_over`, `factor_rotations`):
+`follow_axles`, `step_nodes`, `solve_rotations`, and `hand_over`, `factor_rotations`,
+`fold_factors`):
 those of `advance`, and inlined into it by numba, which keeps the loop as fast as in one
 function (LLVM vectorises the same loops; as plain calls, each with its arrays'
 fields for arguments, the loop took 5 % longer)."""
@@ -386,12 +387,52 @@ def factor_rotations(ec4, ec2, i0, low, high, inv_piv, back):
 
 
 @njit(**TRACK_JIT)
-def solve_rotations(track, eb, ec2, i0, fm, low, high, inv_piv, back, moment):
+def fold_factors(low, high, inv_piv, back, fold, up):
+    """The factors of `factor_rotations` in four lanes a row, as `solve_rotations` takes them.
+
+    Row ``k`` of a lane holds the elimination's ``k``-th step: lanes 0 and 1 (the two rails)
+    down from the first node, node ``k``; lanes 2 and 3 up from the last, node ``up[k]``.
+    With a window of an even number of nodes the upward chain is one node shorter: its
+    first row is a dummy on the last node (multiplier and pivot 0, coupling -1), which
+    leaves the chain at 0 and gives the last node's rotation back unchanged.
+
+    Parameters
+    ----------
+    low, high, inv_piv, back : ndarray, shape (window,)
+        The factors (`factor_rotations`).
+
+    Returns
+    -------
+    None
+        Fills ``fold`` (3, middle node, 4 lanes) with the multiplier [-], one over the pivot
+        [1/(N m)] and the coupling over the pivot [-] of each row and lane, ``up``
+        (middle node,) with the upward lanes' node of each row [-].
+    """
+    width = low.shape[0]
+    p = width // 2
+    shift = 2 * p + 1 - width  # 1: a dummy first row
+    for k in range(p):
+        q = width - 1 - k + shift
+        dummy = q == width
+        up[k] = width - 1 if dummy else q
+        for lane in range(2):
+            fold[0, k, lane] = low[k]
+            fold[1, k, lane] = inv_piv[k]
+            fold[2, k, lane] = back[k]
+            fold[0, k, 2 + lane] = 0.0 if dummy else high[q]
+            fold[1, k, 2 + lane] = 0.0 if dummy else inv_piv[q]
+            fold[2, k, 2 + lane] = -1.0 if dummy else back[q]
+
+
+@njit(**TRACK_JIT)
+def solve_rotations(track, eb, ec2, i0, fm, low, high, inv_piv, fold, up, moment, lanes):
     """The window's rail rotations from its deflections and the wheels' moments.
 
     The rotations carry no inertia (Euler-Bernoulli): at each node the moments of its two
     elements balance the wheels', ``K_θθ θ = M - K_θw w`` (the rotations outside the window
-    held), solved with the factors of `factor_rotations`, both rails and both ends at once.
+    held), solved with the factors of `factor_rotations`: both rails and both ends at once,
+    four chains side by side in the lanes of `fold_factors` (both rails' factors read in one
+    row: 12 % faster than the two chains of each rail indexed apart).
 
     Parameters
     ----------
@@ -403,12 +444,15 @@ def solve_rotations(track, eb, ec2, i0, fm, low, high, inv_piv, back, moment):
         First node of the window [-].
     fm : ndarray, shape (2 rails, window)
         The wheels' moments on the window's nodes (`rail_forces`) [N m].
-    low, high, inv_piv, back : ndarray, shape (window,)
-        The factors (`factor_rotations`).
+    low, high, inv_piv : ndarray, shape (window,)
+        The factors (`factor_rotations`; their middle node's used here).
+    fold, up : ndarray
+        The factors in lanes (`fold_factors`).
     moment : ndarray, shape (2 rails, window + 1)
         Work space: each element's moment from the deflections (and the held rotations
-        for the two at the window's ends) [N m], then the eliminated right-hand side over
-        the pivots [rad].
+        for the two at the window's ends) [N m], then the right-hand side [N m].
+    lanes : ndarray, shape (middle node, 4)
+        Work space: the eliminated right-hand side over the pivots, per lane [rad].
     """
     width = fm.shape[1]
     p = width // 2
@@ -424,27 +468,32 @@ def solve_rotations(track, eb, ec2, i0, fm, low, high, inv_piv, back, moment):
         moment[r, width] += ec2[i0 + width - 1] * track[1, r, i0 + width]  # inside the rail
         for k in range(width):  # the right-hand side, M - K_θw w
             moment[r, k] = fm[r, k] - moment[r, k] - moment[r, k + 1]
-    d0 = d1 = u0 = u1 = 0.0  # eliminated down / up, per rail
-    for k in range(p):  # both ends towards the middle; width - 1 - p <= p rows up
-        d0 = moment[0, k] - low[k] * d0
-        d1 = moment[1, k] - low[k] * d1
-        moment[0, k] = d0 * inv_piv[k]
-        moment[1, k] = d1 * inv_piv[k]
-        q = width - 1 - k
-        if q > p:
-            u0 = moment[0, q] - high[q] * u0
-            u1 = moment[1, q] - high[q] * u1
-            moment[0, q] = u0 * inv_piv[q]
-            moment[1, q] = u1 * inv_piv[q]
-    track[1, 0, i0 + p] = (moment[0, p] - low[p] * d0 - high[p] * u0) * inv_piv[p]
-    track[1, 1, i0 + p] = (moment[1, p] - low[p] * d1 - high[p] * u1) * inv_piv[p]
+    c, ip, bk = fold[0], fold[1], fold[2]
+    d0 = d1 = d2 = d3 = 0.0  # eliminated down (rails 0, 1) and up, over the pivots
+    for k in range(p):  # both ends towards the middle
+        q = up[k]
+        d0 = moment[0, k] - c[k, 0] * d0
+        d1 = moment[1, k] - c[k, 1] * d1
+        d2 = moment[0, q] - c[k, 2] * d2
+        d3 = moment[1, q] - c[k, 3] * d3
+        lanes[k, 0] = d0 * ip[k, 0]
+        lanes[k, 1] = d1 * ip[k, 1]
+        lanes[k, 2] = d2 * ip[k, 2]
+        lanes[k, 3] = d3 * ip[k, 3]
+    t0 = t2 = (moment[0, p] - low[p] * d0 - high[p] * d2) * inv_piv[p]
+    t1 = t3 = (moment[1, p] - low[p] * d1 - high[p] * d3) * inv_piv[p]
+    track[1, 0, i0 + p] = t0
+    track[1, 1, i0 + p] = t1
     for k in range(p - 1, -1, -1):  # out from the middle
-        track[1, 0, i0 + k] = moment[0, k] - back[k] * track[1, 0, i0 + k + 1]
-        track[1, 1, i0 + k] = moment[1, k] - back[k] * track[1, 1, i0 + k + 1]
-        q = width - 1 - k
-        if q > p:
-            track[1, 0, i0 + q] = moment[0, q] - back[q] * track[1, 0, i0 + q - 1]
-            track[1, 1, i0 + q] = moment[1, q] - back[q] * track[1, 1, i0 + q - 1]
+        t0 = lanes[k, 0] - bk[k, 0] * t0
+        t1 = lanes[k, 1] - bk[k, 1] * t1
+        t2 = lanes[k, 2] - bk[k, 2] * t2
+        t3 = lanes[k, 3] - bk[k, 3] * t3
+        track[1, 0, i0 + k] = t0
+        track[1, 1, i0 + k] = t1
+        q = i0 + up[k]
+        track[1, 0, q] = t2
+        track[1, 1, q] = t3
 
 
 @njit(cache=True, fastmath=True, error_model="numpy", nogil=True)
@@ -505,10 +554,14 @@ def advance(
     high = np.empty(width)
     inv_piv = np.empty(width)
     back = np.empty(width)
+    fold = np.empty((3, width // 2, 4))
+    up = np.empty(width // 2, np.int64)
+    lanes = np.empty((width // 2, 4))
     stored = 0
     to_store = -step0 % store_every
     rear = ax_off.min()
     factor_rotations(ec4, ec2, window[0], low, high, inv_piv, back)
+    fold_factors(low, high, inv_piv, back, fold, up)
     for s in range(centre.shape[0]):
         # the window follows the rearmost axle
         i0 = window[0]
@@ -519,6 +572,7 @@ def advance(
         if i0 != window[0]:
             window[0] = i0
             factor_rotations(ec4, ec2, i0, low, high, inv_piv, back)
+            fold_factors(low, high, inv_piv, back, fold, up)
         wheel_loads(
             centre[s], r_in[s], ax_off, ax_contact, ax_rail, inv_count, x, inv_len, bend,
             track, rest_w, rest_th, dc_idx, dc_val, z, static_load, hertz, ax_el, shape, top,
@@ -534,7 +588,7 @@ def advance(
         step_nodes(
             track, fw, shear, i0, step_w, step_s, kp, cp_dt, kb, cb_dt, sgap, fall, ballast
         )  # fmt: skip
-        solve_rotations(track, eb, ec2, i0, fm, low, high, inv_piv, back, moment)
+        solve_rotations(track, eb, ec2, i0, fm, low, high, inv_piv, fold, up, moment, lanes)
         if to_store == 0:
             to_store = store_every
             if not store_vehicle(
