@@ -108,10 +108,10 @@ def wheel_loads(
         Node positions [m].
     inv_len, bend : ndarray, shape (nodes - 1,)
         Each element's ``1 / L`` [1/m] and ``L³ / (3 EI)`` [m/N].
-    track : ndarray, shape (5, 2, nodes)
+    track : ndarray, shape (5, 2 nodes)
         The track's state (`advance`) [m, rad].
-    rest_w, rest_th : ndarray, shape (2, nodes)
-        Rail deflection [m] and rotation [rad] at rest.
+    rest_w, rest_th : ndarray, shape (2 nodes,)
+        Rail deflection [m] and rotation [rad] at rest, interleaved (`interleaved`).
     dc_idx, dc_val : ndarray, shape (contacts, k)
         The rows of ``Dc`` (the contacts' displacements from the vehicle's), sparse [-, m/rad].
     z : ndarray, shape (2 dofs,)
@@ -152,10 +152,11 @@ def wheel_loads(
         shape[a, 1] = L * (t - 2.0 * t2 + t3)
         shape[a, 2] = 3.0 * t2 - 2.0 * t3
         shape[a, 3] = L * (t3 - t2)
-        u = (shape[a, 0] * (track[0, r, e] - rest_w[r, e])
-             + shape[a, 1] * (track[1, r, e] - rest_th[r, e])
-             + shape[a, 2] * (track[0, r, e + 1] - rest_w[r, e + 1])
-             + shape[a, 3] * (track[1, r, e + 1] - rest_th[r, e + 1]))  # fmt: skip
+        j = 2 * e + r  # node e of rail r
+        u = (shape[a, 0] * (track[0, j] - rest_w[j])
+             + shape[a, 1] * (track[1, j] - rest_th[j])
+             + shape[a, 2] * (track[0, j + 2] - rest_w[j + 2])
+             + shape[a, 3] * (track[1, j + 2] - rest_th[j + 2]))  # fmt: skip
         tb = t * (1.0 - t)
         flex[c] += tb * tb * tb * bend[e] * inv_count[c]
         top[c] += (r_in[a] + u) * inv_count[c]
@@ -175,10 +176,11 @@ def rail_forces(track, ea, eb, i0, ax_contact, ax_rail, ax_el, wl, shape, shear,
 
     Parameters
     ----------
-    track : ndarray, shape (5, 2, nodes)
+    track : ndarray, shape (5, 2 nodes)
         The track's state (`advance`) [m, rad].
-    ea, eb : ndarray, shape (nodes - 1,)
-        Each element's stiffness terms ``12 EI/L³`` [N/m] and ``6 EI/L²`` [N].
+    ea, eb : ndarray, shape (2 (nodes - 1),)
+        Each element's stiffness terms ``12 EI/L³`` [N/m] and ``6 EI/L²`` [N], for each rail
+        (`interleaved`).
     i0 : int
         First node of the window [-].
     ax_contact, ax_rail, ax_el : ndarray, shape (axles,)
@@ -191,32 +193,32 @@ def rail_forces(track, ea, eb, i0, ax_contact, ax_rail, ax_el, wl, shape, shear,
     Returns
     -------
     None
-        Fills ``shear`` (2 rails, window + 1) with the shear force [N] of the window's
-        elements and of the two that join it to the rest of the rail (``shear[r, k]``
-        pushes node ``i0 + k`` down and pulls node ``i0 + k - 1`` up; 0 beyond the rail's
-        end), ``fw`` and ``fm`` (2 rails, window) with the wheels' force [N] and moment
+        Fills ``shear`` (2 (window + 1),) with the shear force [N] of the window's
+        elements and of the two that join it to the rest of the rail (``shear[2 k + r]``
+        pushes node ``i0 + k`` of rail ``r`` down and node ``i0 + k - 1`` up; 0 beyond the
+        rail's end), ``fw`` and ``fm`` (2 window,) with the wheels' force [N] and moment
         [N m] on each node of the window (the element's consistent nodal loads).
     """
-    width = fw.shape[1]
+    width = fw.shape[0] // 2
     first = max(i0 - 1, 0)
-    a, b = ea[first : i0 + width], eb[first : i0 + width]
-    for r in range(2):
-        w, th = track[0, r, first : i0 + width + 1], track[1, r, first : i0 + width + 1]
-        sh = shear[r, first - i0 + 1 :]
-        shear[r, 0] = 0.0
-        for j in range(a.shape[0]):
-            sh[j] = a[j] * (w[j] - w[j + 1]) + b[j] * (th[j] + th[j + 1])
-        fw[r, :] = 0.0
-        fm[r, :] = 0.0
+    a, b = ea[2 * first : 2 * (i0 + width)], eb[2 * first : 2 * (i0 + width)]
+    w = track[0, 2 * first : 2 * (i0 + width + 1)]
+    th = track[1, 2 * first : 2 * (i0 + width + 1)]
+    sh = shear[2 * (first - i0 + 1) :]
+    shear[0] = shear[1] = 0.0
+    for j in range(a.shape[0]):
+        sh[j] = a[j] * (w[j] - w[j + 2]) + b[j] * (th[j] + th[j + 2])
+    fw[:] = 0.0
+    fm[:] = 0.0
     for a in range(ax_rail.shape[0]):
-        r = ax_rail[a]
         k = ax_el[a] - i0
+        j = 2 * k + ax_rail[a]
         W = wl[ax_contact[a]]
         if 0 <= k and k + 1 < width:
-            fw[r, k] += W * shape[a, 0]
-            fm[r, k] += W * shape[a, 1]
-            fw[r, k + 1] += W * shape[a, 2]
-            fm[r, k + 1] += W * shape[a, 3]
+            fw[j] += W * shape[a, 0]
+            fm[j] += W * shape[a, 1]
+            fw[j + 2] += W * shape[a, 2]
+            fm[j + 2] += W * shape[a, 3]
 
 
 @njit(**TRACK_JIT)
@@ -225,12 +227,14 @@ def step_nodes(
 ):  # fmt: skip
     """Advance the window's rail deflections and sleepers one step (central differences).
 
-    A loop without branches over each rail's window, its arrays as 1D views, which LLVM
-    vectorises (indexed in 3D they were not, and the loop took twice as long).
+    A loop without branches over the window of both rails side by side (`interleaved`), its
+    arrays as 1D views, which LLVM vectorises (indexed in 3D they were not, and the loop
+    took twice as long; a loop per rail, with the rest of the step in the same layout, made
+    the compiled loop 12 % slower).
 
     Parameters
     ----------
-    track : ndarray, shape (5, 2, nodes)
+    track : ndarray, shape (5, 2 nodes)
         The track's state (`advance`) [m, rad]: the window's deflections and sleeper
         displacements are advanced in place.
     fw, shear : ndarray
@@ -238,45 +242,41 @@ def step_nodes(
         (`rail_forces`) [N].
     i0 : int
         First node of the window [-].
-    step_w : ndarray, shape (nodes,)
-        ``Δt² / m`` of each rail node [s²/kg].
+    step_w : ndarray, shape (2 nodes,)
+        ``Δt² / m`` of each rail node [s²/kg], for each rail.
     step_s : float
         ``Δt² / Ms`` of a sleeper (per rail seat) [s²/kg].
     kp, cp_dt : float
         Pad stiffness [N/m] and damping over the time step ``cp / Δt`` [N/m].
-    kb : ndarray, shape (2, nodes)
+    kb : ndarray, shape (2 nodes,)
         Ballast stiffness under each sleeper [N/m].
     cb_dt : float
         Ballast damping over the time step ``cb / Δt`` [N/m].
-    sgap : ndarray, shape (2, nodes)
+    sgap : ndarray, shape (2 nodes,)
         Seating gap under each sleeper [m].
     fall : float
         Fall under gravity in a step ``g Δt²`` [m].
-    ballast : ndarray, shape (2 rails, nodes)
+    ballast : ndarray, shape (2 nodes,)
         Largest sleeper-ballast force [N] of each sleeper since it was last handed over
         (`follow_axles`): updated.
     """
-    width = fw.shape[1]
-    end = i0 + width
-    m = step_w[i0:end]
-    for r in range(2):
-        w, zs = track[0, r, i0:end], track[2, r, i0:end]
-        w_prev, zs_prev = track[3, r, i0:end], track[4, r, i0:end]
-        f, sh, k_b, gap, most = fw[r], shear[r], kb[r, i0:end], sgap[r, i0:end], ballast[r, i0:end]
-        for k in range(width):
-            w0 = w[k]
-            zs0 = zs[k]
-            dw = w0 - w_prev[k]
-            dz = zs0 - zs_prev[k]
-            pad = kp * (w0 - zs0) + cp_dt * (dw - dz)
-            pen = zs0 - gap[k]
-            bk = k_b[k] * pen + cb_dt * dz
-            bk = bk if pen > 0.0 and bk > 0.0 else 0.0
-            most[k] = max(most[k], bk)
-            w_prev[k] = w0
-            zs_prev[k] = zs0
-            w[k] = w0 + dw + (f[k] + sh[k] - sh[k + 1] - pad) * m[k] + fall
-            zs[k] = zs0 + dz + (pad - bk) * step_s + fall
+    lo, hi = 2 * i0, 2 * i0 + fw.shape[0]
+    m, k_b, gap, most = step_w[lo:hi], kb[lo:hi], sgap[lo:hi], ballast[lo:hi]
+    w, zs, w_prev, zs_prev = track[0, lo:hi], track[2, lo:hi], track[3, lo:hi], track[4, lo:hi]
+    for k in range(hi - lo):
+        w0 = w[k]
+        zs0 = zs[k]
+        dw = w0 - w_prev[k]
+        dz = zs0 - zs_prev[k]
+        pad = kp * (w0 - zs0) + cp_dt * (dw - dz)
+        pen = zs0 - gap[k]
+        bk = k_b[k] * pen + cb_dt * dz
+        bk = bk if pen > 0.0 and bk > 0.0 else 0.0
+        most[k] = max(most[k], bk)
+        w_prev[k] = w0
+        zs_prev[k] = zs0
+        w[k] = w0 + dw + (fw[k] + shear[k] - shear[k + 2] - pad) * m[k] + fall
+        zs[k] = zs0 + dz + (pad - bk) * step_s + fall
 
 
 @njit(**TRACK_JIT)
@@ -291,7 +291,7 @@ def hand_over(r, i, rail_axles, bound, ballast, peak):
         Each rail's axles from the rear, -1 padded [-].
     bound : ndarray, shape (2, k - 1)
         Each rail's first node nearer its axle ``j + 1`` than its axle ``j`` [-].
-    ballast : ndarray, shape (2 rails, nodes)
+    ballast : ndarray, shape (2 nodes,)
         Largest sleeper-ballast force since the last hand-over [N]: cleared.
     peak : ndarray, shape (axles + 1, nodes)
         Largest sleeper-ballast force [N] of each sleeper while each axle is the nearest on
@@ -301,8 +301,8 @@ def hand_over(r, i, rail_axles, bound, ballast, peak):
     while j + 1 < rail_axles.shape[1] and rail_axles[r, j + 1] >= 0 and bound[r, j] <= i:
         j += 1
     a = rail_axles[r, j]
-    peak[a, i] = max(peak[a, i], ballast[r, i])
-    ballast[r, i] = 0.0
+    peak[a, i] = max(peak[a, i], ballast[2 * i + r])
+    ballast[2 * i + r] = 0.0
 
 
 @njit(**TRACK_JIT)
@@ -332,8 +332,8 @@ def follow_axles(x, xc, ax_off, rail_axles, bound, ballast, peak):
             mid = ax_off[rail_axles[r, j]] + ax_off[ahead]
             b = bound[r, j]
             while b < nodes and not 2.0 * (x[b] - xc) > mid:
-                peak[ahead, b] = max(peak[ahead, b], ballast[r, b])
-                ballast[r, b] = 0.0
+                peak[ahead, b] = max(peak[ahead, b], ballast[2 * b + r])
+                ballast[2 * b + r] = 0.0
                 b += 1
             bound[r, j] = b
 
@@ -437,64 +437,65 @@ def solve_rotations(track, eb, ec2, i0, fm, low, high, inv_piv, fold, up, moment
 
     Parameters
     ----------
-    track : ndarray, shape (5, 2, nodes)
+    track : ndarray, shape (5, 2 nodes)
         The track's state (`advance`) [m, rad]: the window's rotations are set in place.
-    eb, ec2 : ndarray, shape (nodes - 1,)
-        Each element's ``6 EI/L²`` [N] and ``2 EI/L`` [N m].
+    eb, ec2 : ndarray, shape (2 (nodes - 1),) and (nodes - 1,)
+        Each element's ``6 EI/L²`` [N] for each rail and ``2 EI/L`` [N m].
     i0 : int
         First node of the window [-].
-    fm : ndarray, shape (2 rails, window)
+    fm : ndarray, shape (2 window,)
         The wheels' moments on the window's nodes (`rail_forces`) [N m].
     low, high, inv_piv : ndarray, shape (window,)
         The factors (`factor_rotations`; their middle node's used here).
     fold, up : ndarray
         The factors in lanes (`fold_factors`).
-    moment : ndarray, shape (2 rails, window + 1)
+    moment : ndarray, shape (2 (window + 1),)
         Work space: each element's moment from the deflections (and the held rotations
         for the two at the window's ends) [N m], then the right-hand side [N m].
     lanes : ndarray, shape (middle node, 4)
         Work space: the eliminated right-hand side over the pivots, per lane [rad].
     """
-    width = fm.shape[1]
+    width = fm.shape[0] // 2
     p = width // 2
     first = max(i0 - 1, 0)
-    b = eb[first : i0 + width]
+    b = eb[2 * first : 2 * (i0 + width)]
+    w, mo = track[0, 2 * first : 2 * (i0 + width + 1)], moment[2 * (first - i0 + 1) :]
+    moment[0] = moment[1] = 0.0
+    for j in range(b.shape[0]):
+        mo[j] = b[j] * (w[j] - w[j + 2])
     for r in range(2):
-        w, mo = track[0, r, first : i0 + width + 1], moment[r, first - i0 + 1 :]
-        moment[r, 0] = 0.0
-        for j in range(b.shape[0]):
-            mo[j] = b[j] * (w[j] - w[j + 1])
         if i0 > 0:
-            moment[r, 0] += ec2[i0 - 1] * track[1, r, i0 - 1]
-        moment[r, width] += ec2[i0 + width - 1] * track[1, r, i0 + width]  # inside the rail
-        for k in range(width):  # the right-hand side, M - K_θw w
-            moment[r, k] = fm[r, k] - moment[r, k] - moment[r, k + 1]
+            moment[r] += ec2[i0 - 1] * track[1, 2 * (i0 - 1) + r]
+        moment[2 * width + r] += ec2[i0 + width - 1] * track[1, 2 * (i0 + width) + r]
+    for k in range(2 * width):  # the right-hand side, M - K_θw w
+        moment[k] = fm[k] - moment[k] - moment[k + 2]
     c, ip, bk = fold[0], fold[1], fold[2]
     d0 = d1 = d2 = d3 = 0.0  # eliminated down (rails 0, 1) and up, over the pivots
     for k in range(p):  # both ends towards the middle
         q = up[k]
-        d0 = moment[0, k] - c[k, 0] * d0
-        d1 = moment[1, k] - c[k, 1] * d1
-        d2 = moment[0, q] - c[k, 2] * d2
-        d3 = moment[1, q] - c[k, 3] * d3
+        d0 = moment[2 * k] - c[k, 0] * d0
+        d1 = moment[2 * k + 1] - c[k, 1] * d1
+        d2 = moment[2 * q] - c[k, 2] * d2
+        d3 = moment[2 * q + 1] - c[k, 3] * d3
         lanes[k, 0] = d0 * ip[k, 0]
         lanes[k, 1] = d1 * ip[k, 1]
         lanes[k, 2] = d2 * ip[k, 2]
         lanes[k, 3] = d3 * ip[k, 3]
-    t0 = t2 = (moment[0, p] - low[p] * d0 - high[p] * d2) * inv_piv[p]
-    t1 = t3 = (moment[1, p] - low[p] * d1 - high[p] * d3) * inv_piv[p]
-    track[1, 0, i0 + p] = t0
-    track[1, 1, i0 + p] = t1
+    t0 = t2 = (moment[2 * p] - low[p] * d0 - high[p] * d2) * inv_piv[p]
+    t1 = t3 = (moment[2 * p + 1] - low[p] * d1 - high[p] * d3) * inv_piv[p]
+    th = track[1, 2 * i0 : 2 * (i0 + width)]
+    th[2 * p] = t0
+    th[2 * p + 1] = t1
     for k in range(p - 1, -1, -1):  # out from the middle
         t0 = lanes[k, 0] - bk[k, 0] * t0
         t1 = lanes[k, 1] - bk[k, 1] * t1
         t2 = lanes[k, 2] - bk[k, 2] * t2
         t3 = lanes[k, 3] - bk[k, 3] * t3
-        track[1, 0, i0 + k] = t0
-        track[1, 1, i0 + k] = t1
-        q = i0 + up[k]
-        track[1, 0, q] = t2
-        track[1, 1, q] = t3
+        th[2 * k] = t0
+        th[2 * k + 1] = t1
+        q = 2 * up[k]
+        th[q] = t2
+        th[q + 1] = t3
 
 
 @njit(cache=True, fastmath=True, error_model="numpy", nogil=True)
@@ -509,9 +510,11 @@ def advance(
 ):  # fmt: skip
     """Advance the vehicle and the track ``centre.size`` steps, updating state in place.
 
-    ``track`` (5, 2, nodes) holds rail deflection, rail rotation and sleeper displacement
-    now, and rail deflection and sleeper displacement one step before; ``window[0]`` is the
-    first node of the window, ``window[1]`` its number of nodes, kept ``margin`` [m] behind
+    ``track`` (5, 2 nodes) holds rail deflection, rail rotation and sleeper displacement
+    now, and rail deflection and sleeper displacement one step before, node ``i`` of rail
+    ``r`` at ``2 i + r`` (`interleaved`, as the other arrays per rail and node or element);
+    ``window[0]`` is the first node of the window, ``window[1]`` its number of nodes, kept
+    ``margin`` [m] behind
     the rearmost axle; ``ax_el`` each axle's element (a search start). ``peak``
     (axles + 1, nodes) collects the largest sleeper-ballast force [N] of each sleeper while
     each axle is the nearest on its rail (``rail_axles`` (2, k): each rail's axles from the
@@ -545,11 +548,11 @@ def advance(
     flex = np.empty(nc)  # mean local flexibility
     wedges = _wedge_arrays(nw, (0.0,))
     shape = np.empty((na, 4))
-    fw = np.empty((2, width))
-    fm = np.empty((2, width))
-    shear = np.empty((2, width + 1))
-    moment = np.empty((2, width + 1))
-    ballast = np.zeros((2, nodes))  # largest since the last hand-over
+    fw = np.empty(2 * width)
+    fm = np.empty(2 * width)
+    shear = np.empty(2 * (width + 1))
+    moment = np.empty(2 * (width + 1))
+    ballast = np.zeros(2 * nodes)  # largest since the last hand-over
     bound = np.full((2, rail_axles.shape[1] - 1), window[0])
     low = np.empty(width)
     high = np.empty(width)
@@ -649,6 +652,16 @@ def sample_profile(knots, coeffs, centre, off, out):
             res = res + coeffs[k, i] * z
             z = z * d
         out[s] = res
+
+
+def interleaved(a):
+    """An array per node or element, or per rail and node (last two axes), as `advance`
+    takes it: node ``i`` of rail ``r`` at ``2 i + r`` of the last axis, both rails side by
+    side so that one loop over the window takes both; one without rails repeated for each."""
+    a = np.asarray(a, dtype=float)
+    if a.ndim == 1:
+        return np.repeat(a, 2)
+    return np.ascontiguousarray(np.swapaxes(a, -1, -2)).reshape(*a.shape[:-2], -1)
 
 
 def vehicle_model(model):
@@ -808,7 +821,8 @@ def solve(
     x = track.position
     L = np.diff(x)
     EI = track.EI
-    coeff = (1 / L, L**3 / (3 * EI), 12 * EI / L**3, 6 * EI / L**2, 4 * EI / L, 2 * EI / L)
+    pair = (12 * EI / L**3, 6 * EI / L**2)  # per element and rail
+    coeff = (1 / L, L**3 / (3 * EI), *map(interleaved, pair), 4 * EI / L, 2 * EI / L)
     inv_count = np.array([1.0 / len(a) for a in model.contact_axles])
     hertz = hertz_stiffness(model.static_wheel_load, prm.wheel_radius)
     lo, width = first_window(p, track, off)
@@ -826,9 +840,13 @@ def solve(
         mine = np.flatnonzero(rail == r)
         rail_axles[r, : mine.size] = mine[np.argsort(off[mine])]
     dt2 = p.dt**2
-    nodal = (dt2 / (track.rail_mass * track.spacing), dt2 / prm.sleeper_mass,
-             prm.pad_stiffness, prm.pad_damping / p.dt, track.kb, prm.ballast_damping / p.dt,
-             track.sleeper_gap, track.rest[0], track.rest[1], GRAVITY * dt2)  # fmt: skip
+    step_w, kb, gap, rest_w, rest_th = map(
+        interleaved,
+        (dt2 / (track.rail_mass * track.spacing), track.kb, track.sleeper_gap, *track.rest[:2]),
+    )
+    nodal = (step_w, dt2 / prm.sleeper_mass, prm.pad_stiffness, prm.pad_damping / p.dt, kb,
+             prm.ballast_damping / p.dt, gap, rest_w, rest_th, GRAVITY * dt2)  # fmt: skip
+    state = interleaved(state)
     point = track.point_stiffness()
     geometry = track.geometry
     splines = [(s.x, s.c) for s in (CubicSpline(geometry.distance, geometry.profile(r))
