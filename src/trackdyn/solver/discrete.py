@@ -655,9 +655,20 @@ def sample_profile(knots, coeffs, centre, off, out):
 
 
 def interleaved(a):
-    """An array per node or element, or per rail and node (last two axes), as `advance`
-    takes it: node ``i`` of rail ``r`` at ``2 i + r`` of the last axis, both rails side by
-    side so that one loop over the window takes both; one without rails repeated for each."""
+    """An array as `advance` takes it: both rails side by side, node ``i`` of rail ``r`` at
+    ``2 i + r`` of the last axis, so that one loop over the window takes both rails.
+
+    Parameters
+    ----------
+    a : array_like, shape (..., 2 rails, n) or (n,)
+        Values per rail and node or element (the last two axes), or per node or element
+        alone, the same for both rails [any unit].
+
+    Returns
+    -------
+    ndarray, shape (..., 2 n)
+        The values interleaved (a C-contiguous copy), those without rails repeated [as ``a``].
+    """
     a = np.asarray(a, dtype=float)
     if a.ndim == 1:
         return np.repeat(a, 2)
