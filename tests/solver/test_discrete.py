@@ -4,6 +4,7 @@ independent integration of the same equations and against the static rail beam."
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
+from scipy.interpolate import CubicSpline
 
 from trackdyn import load_vehicle
 from trackdyn.beam.elements import element_stiffness, hermite
@@ -14,6 +15,7 @@ from trackdyn.simulation import run_batch
 from trackdyn.solver.discrete import (
     axle_table,
     first_window,
+    sample_profile,
     stability_limit,
     start,
     vehicle_model,
@@ -182,6 +184,20 @@ def test_quasi_static_sleeper_forces():
         static = np.maximum(static, sol.support_force)
     got = r.out["ballast_peak"][0, inside]
     assert got == pytest.approx(static[inside], rel=0.01)
+
+
+def test_profile_sampled_as_the_geometry():
+    """The compiled sampling of the profile under an axle gives `Geometry.at` to the bit,
+    beyond the samples at both ends too."""
+    track = small_track(dip=2e-3)
+    g = track.geometry
+    centre = np.linspace(-1.0, g.distance[-1] + 0.5, 2001)
+    for rail in ("left", "right"):
+        spline = CubicSpline(g.distance, g.profile(rail))
+        for off in (-5.2, 0.0, 3.4):
+            got = np.empty(centre.size)
+            sample_profile(spline.x, spline.c, centre, off, got)
+            np.testing.assert_array_equal(got, g.at(rail, centre + off))
 
 
 def test_refusals():
