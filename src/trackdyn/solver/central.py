@@ -42,6 +42,13 @@ sampled while the loop runs this one. A block of 8192 steps keeps more of the la
 in the cache (k and r of a group of 4 contacts, 2 MB each): with 20 000 steps a block, 4
 sections of 500 m through 50 MGT took 3 % longer."""
 
+ALONE_CHUNKS = 4
+"""Blocks of `CHUNK_STEPS` in one block of a batch without lanes (its runs one by one):
+their input is a block of rows of their own, not the lanes' layout, and fewer blocks pay
+less for each block's calls and sampling (2-DOF model, 1 km, every step stored: 24.9-25.3
+ms end to end in blocks of 32 768 steps against 25.3-26.0 in blocks of 8192; 300 000 took
+28 ms, the first block sampled before the loop can start)."""
+
 CHUNK_BYTES = 32 * 2**20
 """Memory of a block's sampled track input, all runs of a batch together, at most [B]
 (a batch's block is shortened to fit; the nonlinear contacts' tables take most)."""
@@ -121,11 +128,16 @@ class _Batch:
         take = self.take = lane_groups(runs)
         self.n_groups, self.in_groups = take.shape[0], np.count_nonzero(take >= 0)
         lanes = self.lanes = take.size
-        self.one = slice(self.in_groups, runs)  # the runs one by one
-        mats = self.mats = run_matrices([p.model for p in problems], [p.dt for p in problems])
-        self.idx = {f for f in mats._fields if f.endswith("_idx")}
-        self.lane_mats = [a if f in self.idx else in_lanes(a, take)
-                          for f, a in mats._asdict().items()]  # fmt: skip
+        mats = run_matrices([p.model for p in problems], [p.dt for p in problems])
+        idx = {f for f in mats._fields if f.endswith("_idx")}  # shared by the runs
+        lane_mats = [a if f in idx else in_lanes(a, take) for f, a in mats._asdict().items()]
+        # each group's and each run's matrices as `advance_lanes` and `advance` take them
+        self.group_mats = [tuple(a if f in idx else a[g] for f, a in
+                                 zip(mats._fields, lane_mats, strict=True))
+                           for g in range(self.n_groups)]  # fmt: skip
+        self.run_mats = {b: tuple(a if f in idx else a[b] for f, a in
+                                  zip(mats._fields, mats, strict=True))
+                         for b in range(self.in_groups, runs)}  # fmt: skip
         self.errors: list = [None] * runs
         # DONE: running; the rows of idle lanes follow the runs' (none one by one)
         status = self.status = np.zeros((max(runs, lanes), 2), np.int64)
@@ -155,7 +167,8 @@ class _Batch:
         nc, grid = len(problems[0].model.contact_names), track_input(problems[0]).grid.size
         self.nc, self.grid = nc, grid
         step_bytes = 8 * nc * (2 + grid)
-        block = self.block = max(1, min(CHUNK_STEPS, CHUNK_BYTES // step_bytes // runs))
+        steps = CHUNK_STEPS * (1 if self.n_groups else ALONE_CHUNKS)
+        block = self.block = max(1, min(steps, CHUNK_BYTES // step_bytes // runs))
         self.firsts = range(0, max(p.n_steps for p in problems), block)
         # the lanes' input (k, r), two blocks' worth, allocated once: the next block is
         # sampled into one while the loop reads the other (`_sampled_blocks`); idle lanes,
@@ -169,9 +182,9 @@ class _Batch:
 
     def sample(self, first: int):
         """Track input of the block of steps from ``first`` on (none for stopped runs):
-        in the lanes with each lane's number of steps, and of the runs one by one, one
-        after the other, with where each starts. Runs on the same input (one object) along
-        the same path share one sample of it."""
+        in the lanes with each lane's number of steps, and of the runs one by one, by run
+        (``(k, r, table)`` as their input gives it). Runs on the same input (one object)
+        along the same path share one sample of it."""
         problems, block, nc, grid, take = self.problems, self.block, self.nc, self.grid, self.take
         count = np.zeros(max(self.runs, self.lanes), np.int64)
         for b, p in enumerate(problems):
@@ -204,41 +217,33 @@ class _Batch:
                     staged[0, b % LANES, : count[b]], staged[1, b % LANES, : count[b]] = kb, rb
                 top = int(count[list(mine)].max())
                 k[g, :top], r[g, :top] = staged[:, :, :top].transpose(0, 2, 3, 1)
-        singly = [inputs(b) for b in range(self.in_groups, self.runs) if count[b]]
-        empty = (np.zeros((0, nc)), np.zeros((0, nc)), np.zeros((0, nc, grid)))
-        alone = [np.concatenate(a) for a in zip(empty, *singly, strict=True)]
-        in_start = np.cumsum([0, *count[self.one]])
+        alone = {b: inputs(b) for b in range(self.in_groups, self.runs) if count[b]}
         per_lane = count[: self.lanes].reshape(self.n_groups, LANES)
-        return (k, r, table, per_lane), (*alone, in_start), int(count.sum())
+        return (k, r, table, per_lane), alone, int(count.sum())
 
     def advance(self, first: int, sampled) -> int:
         """The block of steps from ``first`` on, on its ``sampled`` input (`sample`): the
         groups through `advance_lanes`, the runs one by one through `advance`, each in
         threads; a run that stopped gets its error. Returns the steps done."""
-        (k, r, table, count), (k1, r1, table1, in_start), steps = sampled
-        mats, idx, lane, per_run = self.mats, self.idx, self.lane, self.per_run
+        (k, r, table, count), inputs, steps = sampled
+        lane, per_run = self.lane, self.per_run
         row0 = self.rows[:-1] + (first + per_run["every"] - 1) // per_run["every"]
-        lane_row0 = in_lanes(row0, self.take)
-        groups = [  # each group's arguments of `advance_lanes`
-            (*(a if f in idx else a[g] for f, a in zip(mats._fields, self.lane_mats, strict=True)),
-             lane["static"][g], k[g], r[g], table[g], lane["y_start"][g], lane["y_step"][g],
-             count[g], self.lane_z[g], lane["dt"][g], first, lane["every"][g],
-             self.newton_max_iter, lane_row0[g], *self.flat.values(), self.lane_status[g])
-            for g in range(self.n_groups)
-        ]  # fmt: skip
-        if groups:
+        if self.n_groups:
+            lane_row0 = in_lanes(row0, self.take)
+            groups = [  # each group's arguments of `advance_lanes`
+                (*self.group_mats[g], lane["static"][g], k[g], r[g], table[g],
+                 lane["y_start"][g], lane["y_step"][g], count[g], self.lane_z[g], lane["dt"][g],
+                 first, lane["every"][g], self.newton_max_iter, lane_row0[g],
+                 *self.flat.values(), self.lane_status[g])
+                for g in range(self.n_groups)
+            ]  # fmt: skip
             with vectorised():
                 in_threads(advance_lanes, groups)
-        going = [b for b in range(self.in_groups, self.runs) if self.status[b, 0] == DONE]
-        at = {b: slice(in_start[b - self.in_groups], in_start[b - self.in_groups + 1])
-              for b in going}  # fmt: skip
+        going = [b for b in inputs if self.status[b, 0] == DONE]
         alone = [  # each running run's arguments of `advance`, one by one
-            (*(a if f in idx else a[b] for f, a in zip(mats._fields, mats, strict=True)),
-             per_run["static"][b], k1[at[b]], r1[at[b]],
-             table1[at[b]] if table1.shape[0] else table1,
-             per_run["y_start"][b], per_run["y_step"][b], self.z[b], per_run["dt"][b], first,
-             per_run["every"][b], self.newton_max_iter,
-             *(o[row0[b] - self.split:] for o in self.flat_one.values()))
+            (*self.run_mats[b], per_run["static"][b], *inputs[b], per_run["y_start"][b],
+             per_run["y_step"][b], self.z[b], per_run["dt"][b], first, per_run["every"][b],
+             self.newton_max_iter, *(o[row0[b] - self.split:] for o in self.flat_one.values()))
             for b in going
         ]  # fmt: skip
         for b, ended in zip(going, in_threads(advance, alone), strict=True):
