@@ -63,9 +63,11 @@ def in_threads(kernel, calls: list[tuple]) -> list:
     rather than by a compiled ``prange`` loop around `advance` and `advance_lanes`: such a
     loop is a kernel of its own to compile (5 s for the groups', 2.3 s for the runs' on
     this project's machine, beyond the loops they call), on every first run, for a call
-    per block of 8192 steps.
+    per block of 8192 steps. A single call does not ask numba for its threads: that asks
+    through ctypes, which lets go of the GIL, and the main thread may then wait for the
+    thread sampling the next block to hand it back.
     """
-    threads = min(numba.get_num_threads(), len(calls))
+    threads = min(numba.get_num_threads(), len(calls)) if len(calls) > 1 else 1
     if threads <= 1:
         return [kernel(*args) for args in calls]
     with ThreadPoolExecutor(max_workers=threads) as pool:
@@ -130,7 +132,9 @@ class _Batch:
         lanes = self.lanes = take.size
         mats = run_matrices([p.model for p in problems], [p.dt for p in problems])
         idx = {f for f in mats._fields if f.endswith("_idx")}  # shared by the runs
-        lane_mats = [a if f in idx else in_lanes(a, take) for f, a in mats._asdict().items()]
+        grouped = self.n_groups > 0  # nothing goes into the lanes' layout without lanes
+        lane_mats = [a if f in idx else in_lanes(a, take) for f, a in mats._asdict().items()
+                     if grouped]  # fmt: skip
         # each group's and each run's matrices as `advance_lanes` and `advance` take them
         self.group_mats = [tuple(a if f in idx else a[g] for f, a in
                                  zip(mats._fields, lane_mats, strict=True))
@@ -148,7 +152,7 @@ class _Batch:
                 z[b] = start_state(p, mats.wedge[b])
             except TrackdynInputError as exc:
                 self.errors[b], status[b, 0] = exc, NOT_STARTED
-        self.lane_z = in_lanes(z, take)
+        self.lane_z = in_lanes(z, take) if grouped else None
         self.lane_status = status[:lanes].reshape(self.n_groups, LANES, 2)
         rows = self.rows = np.cumsum([0] + [p.n_store for p in problems])
         width, split = widths(problems[0].model), rows[self.in_groups]
@@ -163,17 +167,22 @@ class _Batch:
             dt=np.array([p.dt for p in problems]),
             every=np.array([p.store_every for p in problems]),
         )
-        self.lane = {name: in_lanes(a, take) for name, a in self.per_run.items()}
+        self.lane = {name: in_lanes(a, take) for name, a in self.per_run.items() if grouped}
         nc, grid = len(problems[0].model.contact_names), track_input(problems[0]).grid.size
         self.nc, self.grid = nc, grid
         step_bytes = 8 * nc * (2 + grid)
         steps = CHUNK_STEPS * (1 if self.n_groups else ALONE_CHUNKS)
-        block = self.block = max(1, min(steps, CHUNK_BYTES // step_bytes // runs))
-        self.firsts = range(0, max(p.n_steps for p in problems), block)
+        block = max(1, min(steps, CHUNK_BYTES // step_bytes // runs))
+        # the first block no longer than a block of the lanes: the loop waits for its input
+        head, n_steps = min(block, CHUNK_STEPS), max(p.n_steps for p in problems)
+        self.firsts = [0, *range(head, n_steps, block)]
+        # each block's steps and which of the two buffers below takes its input
+        self.blocks = {first: (min(head if i == 0 else block, n_steps - first), i % 2)
+                       for i, first in enumerate(self.firsts)}  # fmt: skip
         # the lanes' input (k, r), two blocks' worth, allocated once: the next block is
         # sampled into one while the loop reads the other (`_sampled_blocks`); idle lanes,
-        # and the steps past a lane's last in a block, are not read
-        depth = min(block, self.firsts.stop)
+        # and the steps past a lane's last in a block, are not read (none without lanes)
+        depth = min(block, n_steps) if self.n_groups else 0
         self.buffers = np.zeros((2, 2, self.n_groups, depth, nc, LANES))
         # a group's runs are sampled into `staged`, each run's steps in a row, and go into
         # the lanes' layout in one copy: written run by run, each value there is a cache
@@ -185,12 +194,13 @@ class _Batch:
         in the lanes with each lane's number of steps, and of the runs one by one, by run
         (``(k, r, table)`` as their input gives it). Runs on the same input (one object)
         along the same path share one sample of it."""
-        problems, block, nc, grid, take = self.problems, self.block, self.nc, self.grid, self.take
+        problems, nc, grid, take = self.problems, self.nc, self.grid, self.take
+        block, buffer = self.blocks[first]
         count = np.zeros(max(self.runs, self.lanes), np.int64)
         for b, p in enumerate(problems):
             if self.status[b, 0] == DONE:
                 count[b] = max(min(block, p.n_steps - first), 0)
-        k, r = self.buffers[first // block % 2]
+        k, r = self.buffers[buffer]
         shape = (self.n_groups, int(count[: self.lanes].max(initial=0)), nc, LANES)
         table = np.zeros((*shape, grid) if grid else (self.n_groups, 0, nc, LANES, 0))
         sampled: dict = {}
@@ -268,20 +278,21 @@ class _Batch:
         ]
 
 
-def _sampled_blocks(sample, firsts: range, ahead: bool):
+def _sampled_blocks(sample, firsts: list, ahead: bool):
     """``(first, sample(first))`` for each block of steps. With ``ahead`` the next block's
     input is sampled in a thread while the compiled loop (which releases the GIL) advances
     this one: faster with a core to spare, as when numba may use more than one thread; a
     Dask worker's task runs on one (`trackdyn.parallel`), a core's worth of work, and a
-    second thread there only takes turns with the loop."""
+    second thread there only takes turns with the loop. The first block is sampled here,
+    while the thread starts (0.3 ms) and samples the second."""
     if not ahead:
         for first in firsts:
             yield first, sample(first)
         return
     with ThreadPoolExecutor(max_workers=1) as pool:
-        coming = pool.submit(sample, firsts.start)
-        for first in firsts:
-            sampled = coming.result()
-            if first + firsts.step < firsts.stop:
-                coming = pool.submit(sample, first + firsts.step)
+        coming = None
+        for i, first in enumerate(firsts):
+            sampled = sample(first) if coming is None else coming.result()
+            if i + 1 < len(firsts):
+                coming = pool.submit(sample, firsts[i + 1])
             yield first, sampled
