@@ -42,12 +42,13 @@ sampled while the loop runs this one. A block of 8192 steps keeps more of the la
 in the cache (k and r of a group of 4 contacts, 2 MB each): with 20 000 steps a block, 4
 sections of 500 m through 50 MGT took 3 % longer."""
 
-ALONE_CHUNKS = 4
-"""Blocks of `CHUNK_STEPS` in one block of a batch without lanes (its runs one by one):
-their input is a block of rows of their own, not the lanes' layout, and fewer blocks pay
-less for each block's calls and sampling (2-DOF model, 1 km, every step stored: 24.9-25.3
-ms end to end in blocks of 32 768 steps against 25.3-26.0 in blocks of 8192; 300 000 took
-28 ms, the first block sampled before the loop can start)."""
+ALONE_CHUNKS = 8
+"""Blocks of `CHUNK_STEPS` in one block of a batch without lanes (its runs one by one),
+after a first of `CHUNK_STEPS`: their input is a block of rows of their own, not the
+lanes' layout, and fewer blocks pay less for each block's calls, sampling and hand-over
+between the threads (2-DOF model, 1 km, every step stored, best of 8 in turn, two rounds:
+20.7-21.5 ms end to end in blocks of 65 536 steps, 21.1-21.7 in 32 768, 21.7-22.8 in 8192,
+21.2-21.8 in 131 072)."""
 
 CHUNK_BYTES = 32 * 2**20
 """Memory of a block's sampled track input, all runs of a batch together, at most [B]
