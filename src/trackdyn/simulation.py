@@ -12,6 +12,7 @@ spatially varying track stiffness. PhD thesis, University of Pretoria,
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -168,16 +169,22 @@ class Run:
     problem: Problem
     out: dict
 
-    @property
+    @functools.cached_property
     def time(self) -> np.ndarray:
-        """Time of each stored step [s]."""
+        """Time of each stored step [s], ``i * store_every * dt``, made once (one array:
+        the integers ``i * store_every`` are exact in floating point)."""
         p = self.problem
-        return np.arange(p.n_store) * p.store_every * p.dt
+        time = np.arange(p.n_store, dtype=float)
+        time *= p.store_every
+        time *= p.dt
+        return time
 
-    @property
+    @functools.cached_property
     def centre(self) -> np.ndarray:
-        """Vehicle centre position at each stored step [m]."""
-        return self.problem.centre0 + self.problem.speed * self.time
+        """Vehicle centre position at each stored step, ``centre0 + speed * time`` [m]."""
+        centre = self.problem.speed * self.time
+        centre += self.problem.centre0
+        return centre
 
     @property
     def wheel_load(self) -> np.ndarray:

@@ -122,3 +122,13 @@ def test_full_model_side_mean_is_the_eleven_dof_model(vehicle, track, kp_factor)
         side_of = [list(full.side.values).index(s) for s in full.contact_side.values]
         spread = np.sqrt(np.mean((full.wheel_load.values[:n] - mean[:, side_of]) ** 2, axis=0))
         assert spread.min() > 0.3 * dynamic.max(), (spread, dynamic)
+
+
+def test_side_mean_is_xarrays_grouped_mean_to_the_bit(vehicle):
+    # `results` adds each side's wheels in contact order and divides by their number, in
+    # one compiled pass; xarray's grouped mean (which it replaced) gives the same bits
+    ds = simulate(vehicle, wheelbase_periodic_track(vehicle), RunOptions(model="full"))
+    load = ds.wheel_load.assign_coords(contact_side=ds.contact_side)
+    grouped = load.groupby("contact_side").mean().rename(contact_side="side")
+    expected = grouped.sel(side=ds.side.values).values
+    assert np.array_equal(ds.wheel_load_side_mean.values.view(np.int64), expected.view(np.int64))

@@ -42,6 +42,14 @@ sampled while the loop runs this one. A block of 8192 steps keeps more of the la
 in the cache (k and r of a group of 4 contacts, 2 MB each): with 20 000 steps a block, 4
 sections of 500 m through 50 MGT took 3 % longer."""
 
+ALONE_CHUNKS = 8
+"""Blocks of `CHUNK_STEPS` in one block of a batch without lanes (its runs one by one),
+after a first of `CHUNK_STEPS`: their input is a block of rows of their own, not the
+lanes' layout, and fewer blocks pay less for each block's calls, sampling and hand-over
+between the threads (2-DOF model, 1 km, every step stored, best of 8 in turn, two rounds:
+20.7-21.5 ms end to end in blocks of 65 536 steps, 21.1-21.7 in 32 768, 21.7-22.8 in 8192,
+21.2-21.8 in 131 072)."""
+
 CHUNK_BYTES = 32 * 2**20
 """Memory of a block's sampled track input, all runs of a batch together, at most [B]
 (a batch's block is shortened to fit; the nonlinear contacts' tables take most)."""
@@ -56,9 +64,11 @@ def in_threads(kernel, calls: list[tuple]) -> list:
     rather than by a compiled ``prange`` loop around `advance` and `advance_lanes`: such a
     loop is a kernel of its own to compile (5 s for the groups', 2.3 s for the runs' on
     this project's machine, beyond the loops they call), on every first run, for a call
-    per block of 8192 steps.
+    per block of 8192 steps. A single call does not ask numba for its threads: that asks
+    through ctypes, which lets go of the GIL, and the main thread may then wait for the
+    thread sampling the next block to hand it back.
     """
-    threads = min(numba.get_num_threads(), len(calls))
+    threads = min(numba.get_num_threads(), len(calls)) if len(calls) > 1 else 1
     if threads <= 1:
         return [kernel(*args) for args in calls]
     with ThreadPoolExecutor(max_workers=threads) as pool:
@@ -121,11 +131,18 @@ class _Batch:
         take = self.take = lane_groups(runs)
         self.n_groups, self.in_groups = take.shape[0], np.count_nonzero(take >= 0)
         lanes = self.lanes = take.size
-        self.one = slice(self.in_groups, runs)  # the runs one by one
-        mats = self.mats = run_matrices([p.model for p in problems], [p.dt for p in problems])
-        self.idx = {f for f in mats._fields if f.endswith("_idx")}
-        self.lane_mats = [a if f in self.idx else in_lanes(a, take)
-                          for f, a in mats._asdict().items()]  # fmt: skip
+        mats = run_matrices([p.model for p in problems], [p.dt for p in problems])
+        idx = {f for f in mats._fields if f.endswith("_idx")}  # shared by the runs
+        grouped = self.n_groups > 0  # nothing goes into the lanes' layout without lanes
+        lane_mats = [a if f in idx else in_lanes(a, take) for f, a in mats._asdict().items()
+                     if grouped]  # fmt: skip
+        # each group's and each run's matrices as `advance_lanes` and `advance` take them
+        self.group_mats = [tuple(a if f in idx else a[g] for f, a in
+                                 zip(mats._fields, lane_mats, strict=True))
+                           for g in range(self.n_groups)]  # fmt: skip
+        self.run_mats = {b: tuple(a if f in idx else a[b] for f, a in
+                                  zip(mats._fields, mats, strict=True))
+                         for b in range(self.in_groups, runs)}  # fmt: skip
         self.errors: list = [None] * runs
         # DONE: running; the rows of idle lanes follow the runs' (none one by one)
         status = self.status = np.zeros((max(runs, lanes), 2), np.int64)
@@ -136,7 +153,7 @@ class _Batch:
                 z[b] = start_state(p, mats.wedge[b])
             except TrackdynInputError as exc:
                 self.errors[b], status[b, 0] = exc, NOT_STARTED
-        self.lane_z = in_lanes(z, take)
+        self.lane_z = in_lanes(z, take) if grouped else None
         self.lane_status = status[:lanes].reshape(self.n_groups, LANES, 2)
         rows = self.rows = np.cumsum([0] + [p.n_store for p in problems])
         width, split = widths(problems[0].model), rows[self.in_groups]
@@ -151,16 +168,22 @@ class _Batch:
             dt=np.array([p.dt for p in problems]),
             every=np.array([p.store_every for p in problems]),
         )
-        self.lane = {name: in_lanes(a, take) for name, a in self.per_run.items()}
+        self.lane = {name: in_lanes(a, take) for name, a in self.per_run.items() if grouped}
         nc, grid = len(problems[0].model.contact_names), track_input(problems[0]).grid.size
         self.nc, self.grid = nc, grid
         step_bytes = 8 * nc * (2 + grid)
-        block = self.block = max(1, min(CHUNK_STEPS, CHUNK_BYTES // step_bytes // runs))
-        self.firsts = range(0, max(p.n_steps for p in problems), block)
+        steps = CHUNK_STEPS * (1 if self.n_groups else ALONE_CHUNKS)
+        block = max(1, min(steps, CHUNK_BYTES // step_bytes // runs))
+        # the first block no longer than a block of the lanes: the loop waits for its input
+        head, n_steps = min(block, CHUNK_STEPS), max(p.n_steps for p in problems)
+        self.firsts = [0, *range(head, n_steps, block)]
+        # each block's steps and which of the two buffers below takes its input
+        self.blocks = {first: (min(head if i == 0 else block, n_steps - first), i % 2)
+                       for i, first in enumerate(self.firsts)}  # fmt: skip
         # the lanes' input (k, r), two blocks' worth, allocated once: the next block is
         # sampled into one while the loop reads the other (`_sampled_blocks`); idle lanes,
-        # and the steps past a lane's last in a block, are not read
-        depth = min(block, self.firsts.stop)
+        # and the steps past a lane's last in a block, are not read (none without lanes)
+        depth = min(block, n_steps) if self.n_groups else 0
         self.buffers = np.zeros((2, 2, self.n_groups, depth, nc, LANES))
         # a group's runs are sampled into `staged`, each run's steps in a row, and go into
         # the lanes' layout in one copy: written run by run, each value there is a cache
@@ -169,15 +192,16 @@ class _Batch:
 
     def sample(self, first: int):
         """Track input of the block of steps from ``first`` on (none for stopped runs):
-        in the lanes with each lane's number of steps, and of the runs one by one, one
-        after the other, with where each starts. Runs on the same input (one object) along
-        the same path share one sample of it."""
-        problems, block, nc, grid, take = self.problems, self.block, self.nc, self.grid, self.take
+        in the lanes with each lane's number of steps, and of the runs one by one, by run
+        (``(k, r, table)`` as their input gives it). Runs on the same input (one object)
+        along the same path share one sample of it."""
+        problems, nc, grid, take = self.problems, self.nc, self.grid, self.take
+        block, buffer = self.blocks[first]
         count = np.zeros(max(self.runs, self.lanes), np.int64)
         for b, p in enumerate(problems):
             if self.status[b, 0] == DONE:
                 count[b] = max(min(block, p.n_steps - first), 0)
-        k, r = self.buffers[first // block % 2]
+        k, r = self.buffers[buffer]
         shape = (self.n_groups, int(count[: self.lanes].max(initial=0)), nc, LANES)
         table = np.zeros((*shape, grid) if grid else (self.n_groups, 0, nc, LANES, 0))
         sampled: dict = {}
@@ -204,41 +228,33 @@ class _Batch:
                     staged[0, b % LANES, : count[b]], staged[1, b % LANES, : count[b]] = kb, rb
                 top = int(count[list(mine)].max())
                 k[g, :top], r[g, :top] = staged[:, :, :top].transpose(0, 2, 3, 1)
-        singly = [inputs(b) for b in range(self.in_groups, self.runs) if count[b]]
-        empty = (np.zeros((0, nc)), np.zeros((0, nc)), np.zeros((0, nc, grid)))
-        alone = [np.concatenate(a) for a in zip(empty, *singly, strict=True)]
-        in_start = np.cumsum([0, *count[self.one]])
+        alone = {b: inputs(b) for b in range(self.in_groups, self.runs) if count[b]}
         per_lane = count[: self.lanes].reshape(self.n_groups, LANES)
-        return (k, r, table, per_lane), (*alone, in_start), int(count.sum())
+        return (k, r, table, per_lane), alone, int(count.sum())
 
     def advance(self, first: int, sampled) -> int:
         """The block of steps from ``first`` on, on its ``sampled`` input (`sample`): the
         groups through `advance_lanes`, the runs one by one through `advance`, each in
         threads; a run that stopped gets its error. Returns the steps done."""
-        (k, r, table, count), (k1, r1, table1, in_start), steps = sampled
-        mats, idx, lane, per_run = self.mats, self.idx, self.lane, self.per_run
+        (k, r, table, count), inputs, steps = sampled
+        lane, per_run = self.lane, self.per_run
         row0 = self.rows[:-1] + (first + per_run["every"] - 1) // per_run["every"]
-        lane_row0 = in_lanes(row0, self.take)
-        groups = [  # each group's arguments of `advance_lanes`
-            (*(a if f in idx else a[g] for f, a in zip(mats._fields, self.lane_mats, strict=True)),
-             lane["static"][g], k[g], r[g], table[g], lane["y_start"][g], lane["y_step"][g],
-             count[g], self.lane_z[g], lane["dt"][g], first, lane["every"][g],
-             self.newton_max_iter, lane_row0[g], *self.flat.values(), self.lane_status[g])
-            for g in range(self.n_groups)
-        ]  # fmt: skip
-        if groups:
+        if self.n_groups:
+            lane_row0 = in_lanes(row0, self.take)
+            groups = [  # each group's arguments of `advance_lanes`
+                (*self.group_mats[g], lane["static"][g], k[g], r[g], table[g],
+                 lane["y_start"][g], lane["y_step"][g], count[g], self.lane_z[g], lane["dt"][g],
+                 first, lane["every"][g], self.newton_max_iter, lane_row0[g],
+                 *self.flat.values(), self.lane_status[g])
+                for g in range(self.n_groups)
+            ]  # fmt: skip
             with vectorised():
                 in_threads(advance_lanes, groups)
-        going = [b for b in range(self.in_groups, self.runs) if self.status[b, 0] == DONE]
-        at = {b: slice(in_start[b - self.in_groups], in_start[b - self.in_groups + 1])
-              for b in going}  # fmt: skip
+        going = [b for b in inputs if self.status[b, 0] == DONE]
         alone = [  # each running run's arguments of `advance`, one by one
-            (*(a if f in idx else a[b] for f, a in zip(mats._fields, mats, strict=True)),
-             per_run["static"][b], k1[at[b]], r1[at[b]],
-             table1[at[b]] if table1.shape[0] else table1,
-             per_run["y_start"][b], per_run["y_step"][b], self.z[b], per_run["dt"][b], first,
-             per_run["every"][b], self.newton_max_iter,
-             *(o[row0[b] - self.split:] for o in self.flat_one.values()))
+            (*self.run_mats[b], per_run["static"][b], *inputs[b], per_run["y_start"][b],
+             per_run["y_step"][b], self.z[b], per_run["dt"][b], first, per_run["every"][b],
+             self.newton_max_iter, *(o[row0[b] - self.split:] for o in self.flat_one.values()))
             for b in going
         ]  # fmt: skip
         for b, ended in zip(going, in_threads(advance, alone), strict=True):
@@ -263,20 +279,21 @@ class _Batch:
         ]
 
 
-def _sampled_blocks(sample, firsts: range, ahead: bool):
+def _sampled_blocks(sample, firsts: list, ahead: bool):
     """``(first, sample(first))`` for each block of steps. With ``ahead`` the next block's
     input is sampled in a thread while the compiled loop (which releases the GIL) advances
     this one: faster with a core to spare, as when numba may use more than one thread; a
     Dask worker's task runs on one (`trackdyn.parallel`), a core's worth of work, and a
-    second thread there only takes turns with the loop."""
+    second thread there only takes turns with the loop. The first block is sampled here,
+    while the thread starts (0.3 ms) and samples the second."""
     if not ahead:
         for first in firsts:
             yield first, sample(first)
         return
     with ThreadPoolExecutor(max_workers=1) as pool:
-        coming = pool.submit(sample, firsts.start)
-        for first in firsts:
-            sampled = coming.result()
-            if first + firsts.step < firsts.stop:
-                coming = pool.submit(sample, first + firsts.step)
+        coming = None
+        for i, first in enumerate(firsts):
+            sampled = sample(first) if coming is None else coming.result()
+            if i + 1 < len(firsts):
+                coming = pool.submit(sample, firsts[i + 1])
             yield first, sampled

@@ -29,7 +29,6 @@ from typing import Protocol
 
 import numpy as np
 from numba import njit
-from scipy.interpolate import CubicSpline
 
 from trackdyn.errors import TrackdynInputError
 from trackdyn.track.track import RAILS, LinearisedTrack, load_surface
@@ -161,9 +160,8 @@ class ContactInput:
                 for x in axles
             ]
         )
-        g = lin.track.geometry
-        splines = [CubicSpline(g.distance, g.profile(r)) for r in RAILS]
-        self.coef = np.ascontiguousarray([s.c for s in splines])
+        splines = lin.track.geometry.splines
+        self.coef = np.ascontiguousarray([splines[r].c for r in RAILS])
         self.grid = np.empty(0)
         if nonlinear:
             if any(len(a) != 1 for a in model.contact_axles):

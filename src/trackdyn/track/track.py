@@ -62,7 +62,9 @@ class Geometry:
         return getattr(self, rail)
 
     @functools.cached_property
-    def _splines(self) -> dict:
+    def splines(self) -> dict:
+        """The cubic spline of each rail's profile through its samples (`at`), by rail,
+        made once (`trackdyn.track.inputs.ContactInput` evaluates their pieces)."""
         return {r: CubicSpline(self.distance, getattr(self, r)) for r in RAILS}
 
     def at(self, rail: str, x) -> np.ndarray:
@@ -72,7 +74,7 @@ class Geometry:
         follows it (as on rigid track) is not kicked at every measured point.
         """
         self.profile(rail)
-        return self._splines[rail](np.asarray(x, dtype=float))
+        return self.splines[rail](np.asarray(x, dtype=float))
 
 
 @dataclass(frozen=True)
