@@ -153,7 +153,7 @@ class _Batch:
                 z[b] = start_state(p, mats.wedge[b])
             except TrackdynInputError as exc:
                 self.errors[b], status[b, 0] = exc, NOT_STARTED
-        self.lane_z = in_lanes(z, take) if grouped else None
+        self.lane_z = in_lanes(z, take)  # (0, ...) without lanes
         self.lane_status = status[:lanes].reshape(self.n_groups, LANES, 2)
         rows = self.rows = np.cumsum([0] + [p.n_store for p in problems])
         width, split = widths(problems[0].model), rows[self.in_groups]

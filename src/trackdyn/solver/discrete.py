@@ -832,8 +832,8 @@ def solve(
     x = track.position
     L = np.diff(x)
     EI = track.EI
-    pair = (12 * EI / L**3, 6 * EI / L**2)  # per element and rail
-    coeff = (1 / L, L**3 / (3 * EI), *map(interleaved, pair), 4 * EI / L, 2 * EI / L)
+    ea, eb = interleaved(12 * EI / L**3), interleaved(6 * EI / L**2)  # per element and rail
+    coeff = (1 / L, L**3 / (3 * EI), ea, eb, 4 * EI / L, 2 * EI / L)
     inv_count = np.array([1.0 / len(a) for a in model.contact_axles])
     hertz = hertz_stiffness(model.static_wheel_load, prm.wheel_radius)
     lo, width = first_window(p, track, off)
@@ -867,7 +867,8 @@ def solve(
         centre = p.centre0 + p.speed * p.dt * steps
         r_in = np.empty((steps.size, off.size))
         for a, (o, r) in enumerate(zip(off, rail, strict=True)):
-            sample_profile(*splines[r], centre, o, r_in[:, a])
+            knots, coeffs = splines[r]
+            sample_profile(knots, coeffs, centre, o, r_in[:, a])
         kept = centre[-first % p.store_every :: p.store_every]  # the stored steps'
         k_in = np.zeros((kept.size, len(inv_count)))
         for o, c, r in zip(off, contact, rail, strict=True):

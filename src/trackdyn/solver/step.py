@@ -34,6 +34,8 @@ spatially varying track stiffness. PhD thesis, University of Pretoria, §5.4, eq
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numba import njit
 
@@ -43,7 +45,7 @@ from trackdyn.solver.statics import WEDGE_COLUMNS, table_force_at
 EXPONENT = 0x7FF0000000000000
 """Exponent bits of a float64, all set for inf and NaN (a test that ``fastmath`` keeps)."""
 
-INLINED = dict(cache=True, fastmath=FASTMATH, error_model="numpy", inline="always")
+INLINED: dict[str, Any] = dict(cache=True, fastmath=FASTMATH, error_model="numpy", inline="always")
 """numba options of the step's functions: inlined into the loop that calls them."""
 
 _fma = lanewise("c + a * b")
