@@ -99,7 +99,7 @@ PHASES = {
     "  of which the solver (compiled loops)": ("solver/__init__.py", "solve"),
     "outputs (write_outputs)": ("outputs.py", "write_outputs"),
     "  of which netCDF": ("netcdf.py", "write_netcdf"),
-    "  of which figures drawn (plot_*)": ("deteriorate/plots.py", "plot_"),
+    "  of which figures drawn (plot_*)": ("plots/deteriorate.py", "plot_"),
     "  of which figures saved (PNG)": ("plots/__init__.py", "save"),
 }
 """Phases of the command's profile: (end of the file name, the function's name, or the start

@@ -169,10 +169,8 @@ class Deterioration(_Solved):
         from trackdyn.commands.deteriorate.outputs import line_figure, section_figures
 
         datasets = self._solved()
-        figures = {}
-        for ds in datasets:
-            figures.update(section_figures(ds))
-        return figures | line_figure(datasets)
+        drawings = [*map(section_figures, datasets), line_figure(datasets)]
+        return {file: d.figure() for each in drawings for file, d in each.items()}
 
 
 @dataclasses.dataclass

@@ -44,7 +44,7 @@ def _client(workers: int | None, scheduler: str | None):
     # setting is undone by each task (`keep_freed_memory`). Under -q the cluster's own
     # warnings (a worker "still alive after 4.0 seconds, killing" at shutdown) are not shown:
     # the level of the 'distributed' loggers, here and in the workers (`silence_logs`).
-    with dask.config.set({"distributed.worker.profile.enabled": False}), _interrupts_here():
+    with dask.config.set({"distributed.worker.profile.enabled": False}), interrupts_here():
         cluster = LocalCluster(
             n_workers=workers or os.cpu_count() or 1,
             threads_per_worker=1,
@@ -58,11 +58,12 @@ def _client(workers: int | None, scheduler: str | None):
 
 
 @contextlib.contextmanager
-def _interrupts_here():
-    """Block SIGINT in this thread while the local cluster starts: its event-loop thread,
-    and the worker processes started from it, keep the mask, so that Ctrl-C (which a
-    terminal sends to the whole process group) reaches this process only, whose handler
-    stops the workers (`trackdyn.commands.staging`). Without it a worker that the signal
+def interrupts_here():
+    """Block SIGINT in this thread while child processes start (a local cluster, a
+    command's helper process): the threads and processes started meanwhile (the cluster's
+    event-loop thread and its workers) keep the mask, so that Ctrl-C (which a terminal
+    sends to the whole process group) reaches this process only, whose handler stops the
+    children (`trackdyn.commands.staging`). Without it a worker that the signal
     caught starting up or shutting down printed its KeyboardInterrupt (3 of 46 trials). A
     signal that comes meanwhile waits until the cluster is up. The resource tracker starts
     first: starting it unblocks SIGINT in the thread that does (multiprocessing's

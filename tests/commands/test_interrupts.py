@@ -118,14 +118,59 @@ def test_the_workers_of_a_local_cluster_block_sigint():
     assert not _sigint_blocked(None)
 
 
-def test_ctrl_c_to_the_process_group_of_a_two_worker_run_ends_quietly(tmp_path):
-    """SIGINT to the process group (Ctrl-C in a terminal) of a 2-worker deterioration run
-    at moments spread over it, the cluster's start and end included (before: 3 of 46
-    trials 2.8-4 s after the start ended in a traceback): exit 130 and nothing on stderr,
-    nothing written (or, after the end, the whole run)."""
-    (tmp_path / "d.toml").write_text(DETERIORATE)
+LINE = """[run]
+model = "7dof"
+[loop]
+total_mgt = 1
+snapshot_every_mgt = 0.5
+segment_length_m = 50
+[track]
+sections = "sections.csv"
+"""
+
+
+def _line(folder):
+    """Two 100 m sections: 8 figures, drawn by a second process too
+    (`trackdyn.commands.drawing.HELPED_FIGURES`)."""
+    from trackdyn.io import write_geometry, write_supports
+    from trackdyn.track.synthetic import synthetic_track
+
+    rows = ["name,geometry,supports"]
+    for name in ("a", "b"):
+        trk = synthetic_track(100.0, spectrum="fra5", seed=len(rows))
+        write_geometry(trk.geometry, folder / f"{name}_geometry.csv")
+        write_supports(trk.supports, folder / f"{name}_supports.csv")
+        rows.append(f"{name},{name}_geometry.csv,{name}_supports.csv")
+    (folder / "sections.csv").write_text("\n".join(rows) + "\n")
+    (folder / "d.toml").write_text(LINE)
+    return []
+
+
+def _gone(group: int) -> bool:
+    """No process left in process group ``group`` within 5 s."""
+    for _ in range(50):
+        try:
+            os.killpg(group, 0)
+        except ProcessLookupError:
+            return True
+        time.sleep(0.1)
+    return False
+
+
+@pytest.mark.parametrize("children", ["two workers", "a figures' helper"])
+def test_ctrl_c_to_the_process_group_ends_quietly(tmp_path, children):
+    """SIGINT to the process group (Ctrl-C in a terminal) of a deterioration run with child
+    processes (a local cluster's 2 workers; a line's figures drawn by a second process) at
+    moments spread over it, the children's start and end included (before: 3 of 46 trials
+    2.8-4 s after the start of a cluster ended in a traceback): exit 130 and nothing on
+    stderr, nothing written (or, after the end, the whole run), no process left behind."""
+    if children == "two workers":
+        (tmp_path / "d.toml").write_text(DETERIORATE)
+        extra = ["--workers", "2"]
+    else:
+        extra = _line(tmp_path)
     # quiet: a run that ends before the signal says nothing either ("wrote ..." otherwise)
-    args = ["-q", "deteriorate", str(tmp_path / "d.toml"), "--workers", "2"]
+    args = ["-q", "deteriorate", str(tmp_path / "d.toml"), *extra]
     t0 = time.perf_counter()
     whole = start(args, tmp_path / "whole")
     assert whole.wait(timeout=600) == 0, whole.stderr.read().decode()
@@ -145,3 +190,4 @@ def test_ctrl_c_to_the_process_group_of_a_two_worker_run_ends_quietly(tmp_path):
         left = sorted(p.name for p in out.iterdir()) if out.exists() else []
         assert (code, err) in ((130, ""), (0, "")), (fraction, code, err)
         assert left in ([], expected), (fraction, left)
+        assert _gone(proc.pid), fraction

@@ -1,12 +1,14 @@
 """Sections lists and their runs through Dask: same results with 1 and 2 workers."""
 
 import numpy as np
+import psutil
 import pytest
 import xarray as xr
 
 from trackdyn.commands.deteriorate.outputs import write_outputs
 from trackdyn.commands.deteriorate.scenario import load_deterioration
 from trackdyn.commands.deteriorate.sections import read_sections, section_tasks
+from trackdyn.commands.drawing import HELPED_FIGURES, helper
 from trackdyn.deterioration.runs import run_sections
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import write_geometry, write_supports
@@ -68,6 +70,25 @@ def test_one_and_two_workers_give_identical_results(folder, tmp_path):
         ds.attrs["section"] = task.section.name
     names = write_outputs(serial, tmp_path)
     assert "line.png" in names and (tmp_path / "line.png").read_bytes()[:4] == b"\x89PNG"
+    # a second process drawing the figures meanwhile draws each to the same bytes, and
+    # one that dies (killed before it draws) leaves its figures to this process
+    figures = [n for n in names if n.endswith(".png")]
+    assert len(figures) == 9
+    with helper(HELPED_FIGURES - 1) as pool:  # fewer: its start would cost more than it does
+        assert pool is None
+    for kill in (False, True):
+        out = tmp_path / f"helped_{kill}"
+        out.mkdir()
+        with helper(len(figures)) as pool:
+            assert pool is not None  # this machine has 2 cores
+            if kill:
+                for child in psutil.Process().children():
+                    if "spawn_main" in " ".join(child.cmdline()):
+                        child.kill()
+                        child.wait(5)
+            assert write_outputs(serial, out, pool) == names
+        for name in figures:
+            assert (out / name).read_bytes() == (tmp_path / name).read_bytes(), name
 
 
 @pytest.mark.parametrize(

@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 
 from trackdyn.commands.compiling import say_if_compiling
+from trackdyn.commands.drawing import helper
 from trackdyn.commands.geometry_notes import PREFIX, geometry_notes
 from trackdyn.commands.staging import Record, output_folder
 from trackdyn.commands.tables import deterioration_table, forecast_table, frame_table
@@ -39,7 +40,7 @@ def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> 
     console : rich.console.Console
         Where the summary table is shown.
     """
-    from trackdyn.commands.deteriorate.outputs import summary, write_outputs
+    from trackdyn.commands.deteriorate.outputs import SECTION_FIGURES, summary, write_outputs
     from trackdyn.commands.deteriorate.scenario import load_deterioration
     from trackdyn.commands.deteriorate.sections import section_tasks
     from trackdyn.deterioration.runs import in_process, run_sections
@@ -57,7 +58,8 @@ def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> 
         from trackdyn.commands.deteriorate.forecast import plan_forecast
 
         plan = plan_forecast(spec, base, tasks)
-    with output_folder(out, "deteriorate", overwrite, record) as stage:
+    figures = len(SECTION_FIGURES) * len(tasks)
+    with output_folder(out, "deteriorate", overwrite, record) as stage, helper(figures) as pool:
         say_if_compiling("deteriorate", scheduler)
         datasets = run_sections(tasks, workers=workers, scheduler=scheduler, progress=not serial)
         for ds in datasets:
@@ -65,10 +67,11 @@ def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> 
             told = ((k.removeprefix(PREFIX), v) for k, v in attrs if k.startswith(PREFIX))
             geometry_notes(told, f"section {ds.attrs['section']}")
         record.headline = {"sections": summary(datasets).to_dict(orient="records")}
-        files = write_outputs(datasets, stage)
+        files = write_outputs(datasets, stage, pool)
         forecast = table = None
         if plan is not None:
-            forecast, table = _forecast(plan, tasks, workers, scheduler, stage, files, record)
+            forecast, table = _forecast(plan, tasks, workers, scheduler, stage, pool, files,
+                                        record)  # fmt: skip
         deferred = None
         if spec.plan is not None:
             deferred = _plan(spec, tasks, datasets, forecast, workers, scheduler, stage, files,
@@ -83,13 +86,14 @@ def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> 
     note("\n".join(record.lines()), 2)
 
 
-def _forecast(plan, tasks, workers, scheduler, stage, files, record):
-    """Run the planned ensemble, write its files into ``stage`` (their names added to
-    ``files``) and its headline into ``record``; return ``forecast.csv``'s table."""
+def _forecast(plan, tasks, workers, scheduler, stage, pool, files, record):
+    """Run the planned ensemble, write its files into ``stage`` (their figures drawn by
+    ``pool``'s helper; their names added to ``files``) and its headline into ``record``;
+    return ``forecast.csv``'s table."""
     from trackdyn.commands.deteriorate.forecast import headline, run_forecast, write_forecast
 
     forecast = run_forecast(plan, tasks, workers=workers, scheduler=scheduler, progress=True)
-    written, table = write_forecast(forecast, [t.section.name for t in tasks], stage)
+    written, table = write_forecast(forecast, [t.section.name for t in tasks], stage, pool)
     files += written
     record.headline["forecast_first_tamping_mgt"] = headline(table)
     return forecast, table

@@ -166,8 +166,11 @@ def headline(table: pd.DataFrame) -> list[dict]:
     return first[keep].to_dict(orient="records")
 
 
-def write_forecast(forecast: Forecast, names, folder) -> tuple[list[str], pd.DataFrame]:
-    """Write the forecast's tables and figures into ``folder``.
+def write_forecast(
+    forecast: Forecast, names, folder, helper=None
+) -> tuple[list[str], pd.DataFrame]:
+    """Write the forecast's tables and figures into ``folder``, the figures drawn by the
+    ``helper`` process meanwhile if given (`trackdyn.commands.drawing`).
 
     Returns
     -------
@@ -177,16 +180,17 @@ def write_forecast(forecast: Forecast, names, folder) -> tuple[list[str], pd.Dat
     table : pandas.DataFrame
         ``forecast.csv``'s table.
     """
-    from trackdyn.plots import save
+    from trackdyn.commands.drawing import Drawing, drawn
     from trackdyn.plots.deteriorate import plot_fan, plot_reach_probability
 
     table, probability = tables(forecast, names)
-    table.to_csv(folder / "forecast.csv", index=False, float_format="%.6g")
-    probability.to_csv(folder / "forecast_probability.csv", index=False, float_format="%.6g")
-    files = ["forecast.csv", "forecast_probability.csv"]
-    for name, members in zip(names, forecast.ensembles, strict=True):
-        title = f"{name}: {len(members)} members"
-        save(plot_fan(members, title=title), folder / f"{name}_forecast_fan.png")
-        files.append(f"{name}_forecast_fan.png")
-    save(plot_reach_probability(probability), folder / "forecast_probability.png")
-    return [*files, "forecast_probability.png"], table
+    figures = {
+        f"{name}_forecast_fan.png": Drawing(plot_fan, (members,), {"title": f"{name}: "
+                                                                   f"{len(members)} members"})
+        for name, members in zip(names, forecast.ensembles, strict=True)
+    }  # fmt: skip
+    figures["forecast_probability.png"] = Drawing(plot_reach_probability, (probability,))
+    with drawn(figures, folder, helper):
+        table.to_csv(folder / "forecast.csv", index=False, float_format="%.6g")
+        probability.to_csv(folder / "forecast_probability.csv", index=False, float_format="%.6g")
+    return ["forecast.csv", "forecast_probability.csv", *figures], table

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from trackdyn.commands.drawing import Drawing, drawn
 from trackdyn.commands.netcdf import write_netcdf
 from trackdyn.deterioration.results import vehicle_shares
-from trackdyn.plots import save
 from trackdyn.plots.deteriorate import (
     plot_geometry_evolution,
     plot_line,
@@ -207,9 +207,19 @@ def _line_title(datasets) -> str:
             f"{length / 1e3:.2f} km, {mgt:g} MGT")  # fmt: skip
 
 
-def section_figures(ds) -> dict:
+SECTION_FIGURES = {
+    "geometry": plot_geometry_evolution,
+    "quality": plot_quality_evolution,
+    "settlement_map": plot_settlement_map,
+    "straight_line": plot_straight_line,
+}
+"""Each section's figures: ``<name>_<kind>.png`` by its kind."""
+
+
+def section_figures(ds) -> dict[str, Drawing]:
     """A section's figures by file name: ``<name>_geometry.png``, ``<name>_quality.png``,
-    ``<name>_settlement_map.png``, ``<name>_straight_line.png`` (`trackdyn.plots.deteriorate`).
+    ``<name>_settlement_map.png``, ``<name>_straight_line.png`` (`trackdyn.plots.deteriorate`),
+    to be drawn (`Drawing.figure`).
 
     Parameters
     ----------
@@ -218,26 +228,19 @@ def section_figures(ds) -> dict:
     """
     name = ds.attrs["section"]
     title = f"{name}: {ds.attrs['traffic']}"
-    return {
-        f"{name}_{kind}.png": draw(ds, title=title)
-        for kind, draw in (
-            ("geometry", plot_geometry_evolution),
-            ("quality", plot_quality_evolution),
-            ("settlement_map", plot_settlement_map),
-            ("straight_line", plot_straight_line),
-        )
-    }
+    return {f"{name}_{kind}.png": Drawing(draw, (ds,), {"title": title})
+            for kind, draw in SECTION_FIGURES.items()}  # fmt: skip
 
 
-def line_figure(datasets) -> dict:
+def line_figure(datasets) -> dict[str, Drawing]:
     """``line.png``, the straight-line diagram of the whole line, for two or more sections
-    (none for one)."""
+    (none for one), to be drawn (`Drawing.figure`)."""
     if len(datasets) < 2:
         return {}
-    return {"line.png": plot_line(datasets, title=_line_title(datasets))}
+    return {"line.png": Drawing(plot_line, (list(datasets),), {"title": _line_title(datasets)})}
 
 
-def write_outputs(datasets, folder) -> list[str]:
+def write_outputs(datasets, folder, helper=None) -> list[str]:
     """Write every file of a prediction into ``folder``; return the file names.
 
     Per section ``<name>``: ``deterioration_<name>.nc``, ``settlement_<name>.csv`` and the
@@ -255,6 +258,8 @@ def write_outputs(datasets, folder) -> list[str]:
         Results of `trackdyn.deterioration.predict` with a ``section`` attribute.
     folder : Path
         Output folder.
+    helper : concurrent.futures.ProcessPoolExecutor, optional
+        A process drawing the figures meanwhile (`trackdyn.commands.drawing.helper`).
     """
     names = []
 
@@ -262,19 +267,8 @@ def write_outputs(datasets, folder) -> list[str]:
         frame.to_csv(folder / name, index=False, float_format="%.6g")
         names.append(name)
 
-    def figures(drawn):
-        for file, fig in drawn.items():
-            save(fig, folder / file)
-            names.append(file)
-
-    for ds in datasets:
-        name = ds.attrs["section"]
-        write_netcdf(ds, folder / f"deterioration_{name}.nc")
-        names.append(f"deterioration_{name}.nc")
-        csv(settlement_table(ds), f"settlement_{name}.csv")
-        figures(section_figures(ds))
-    figures(line_figure(datasets))
-    csv(summary(datasets), "summary.csv")
+    figures = [section_figures(ds) for ds in datasets]
+    line = line_figure(datasets)
     tables = [
         ("quality.csv", quality_table),
         ("maintenance.csv", maintenance_table),
@@ -283,6 +277,15 @@ def write_outputs(datasets, folder) -> list[str]:
     ]
     if any(ds.attrs.get("option_maintenance_policy") for ds in datasets):
         tables += [("interventions.csv", interventions_table), ("life_cycle.csv", life_cycle_table)]
-    for name, table in tables:
-        csv(pd.concat([table(ds) for ds in datasets], ignore_index=True), name)
+    with drawn({f: d for each in [*figures, line] for f, d in each.items()}, folder, helper):
+        for ds, drawings in zip(datasets, figures, strict=True):
+            name = ds.attrs["section"]
+            write_netcdf(ds, folder / f"deterioration_{name}.nc")
+            names.append(f"deterioration_{name}.nc")
+            csv(settlement_table(ds), f"settlement_{name}.csv")
+            names += drawings
+        names += line
+        csv(summary(datasets), "summary.csv")
+        for name, table in tables:
+            csv(pd.concat([table(ds) for ds in datasets], ignore_index=True), name)
     return names
