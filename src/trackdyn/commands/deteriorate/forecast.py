@@ -166,11 +166,9 @@ def headline(table: pd.DataFrame) -> list[dict]:
     return first[keep].to_dict(orient="records")
 
 
-def write_forecast(
-    forecast: Forecast, names, folder, helper=None
-) -> tuple[list[str], pd.DataFrame]:
+def write_forecast(forecast: Forecast, names, folder, pool=None) -> tuple[list[str], pd.DataFrame]:
     """Write the forecast's tables and figures into ``folder``, the figures drawn by the
-    ``helper`` process meanwhile if given (`trackdyn.commands.drawing`).
+    ``pool``'s helper process meanwhile if given (`trackdyn.commands.drawing`).
 
     Returns
     -------
@@ -190,7 +188,7 @@ def write_forecast(
         for name, members in zip(names, forecast.ensembles, strict=True)
     }  # fmt: skip
     figures["forecast_probability.png"] = Drawing(plot_reach_probability, (probability,))
-    with drawn(figures, folder, helper):
+    with drawn(figures, folder, pool):
         table.to_csv(folder / "forecast.csv", index=False, float_format="%.6g")
         probability.to_csv(folder / "forecast_probability.csv", index=False, float_format="%.6g")
     return ["forecast.csv", "forecast_probability.csv", *figures], table

@@ -240,7 +240,7 @@ def line_figure(datasets) -> dict[str, Drawing]:
     return {"line.png": Drawing(plot_line, (list(datasets),), {"title": _line_title(datasets)})}
 
 
-def write_outputs(datasets, folder, helper=None) -> list[str]:
+def write_outputs(datasets, folder, pool=None) -> list[str]:
     """Write every file of a prediction into ``folder``; return the file names.
 
     Per section ``<name>``: ``deterioration_<name>.nc``, ``settlement_<name>.csv`` and the
@@ -258,8 +258,8 @@ def write_outputs(datasets, folder, helper=None) -> list[str]:
         Results of `trackdyn.deterioration.predict` with a ``section`` attribute.
     folder : Path
         Output folder.
-    helper : concurrent.futures.ProcessPoolExecutor, optional
-        A process drawing the figures meanwhile (`trackdyn.commands.drawing.helper`).
+    pool : concurrent.futures.ProcessPoolExecutor, optional
+        Its helper process draws the figures meanwhile (`trackdyn.commands.drawing.helper`).
     """
     names = []
 
@@ -277,7 +277,7 @@ def write_outputs(datasets, folder, helper=None) -> list[str]:
     ]
     if any(ds.attrs.get("option_maintenance_policy") for ds in datasets):
         tables += [("interventions.csv", interventions_table), ("life_cycle.csv", life_cycle_table)]
-    with drawn({f: d for each in [*figures, line] for f, d in each.items()}, folder, helper):
+    with drawn({f: d for each in [*figures, line] for f, d in each.items()}, folder, pool):
         for ds, drawings in zip(datasets, figures, strict=True):
             name = ds.attrs["section"]
             write_netcdf(ds, folder / f"deterioration_{name}.nc")
