@@ -2,12 +2,13 @@
 
 Drawing and saving a PNG is matplotlib's Python code, one core's work: a section of
 `trackdyn deteriorate` has four figures (about 0.7 s), which took more than half the
-command's time on a line of sections. A command that writes several figures starts a
-`helper` process when it starts (the helper imports matplotlib and trackdyn's figures while
-the runs go on), hands it every figure as a `Drawing` (the ``plot_*`` function and its
-data, sent by pickle) and writes its own files meanwhile; then it draws, from the last,
-the figures the helper has not begun (`drawn`). Either process draws the same figure to the
-same bytes. On one core there is no helper and this process draws them all.
+command's time on a line of sections. A command that writes at least `HELPED_FIGURES`
+figures starts a `helper` process when it starts (the helper imports matplotlib and
+trackdyn's figures while the runs go on), hands it every figure as a `Drawing` (the
+``plot_*`` function and its data, sent by pickle) and writes its own files meanwhile; then
+it draws, from the last, the figures the helper has not begun (`drawn`). Either process
+draws the same figure to the same bytes. On one core there is no helper and this process
+draws them all.
 
 The helper blocks SIGINT (`trackdyn.parallel.interrupts_here`), as a local cluster's
 workers do: Ctrl-C in a terminal reaches the command, whose handler removes the staging
