@@ -42,8 +42,10 @@ def _client(workers: int | None, scheduler: str | None):
     # Dask's statistical profiler takes the GIL every 10 ms (a 1 km 11-DOF run took up to
     # twice as long in a worker with it); local workers run without it. Dask's malloc
     # setting is undone by each task (`keep_freed_memory`). Under -q the cluster's own
-    # warnings (a worker "still alive after 4.0 seconds, killing" at shutdown) are not shown:
-    # the level of the 'distributed' loggers, here and in the workers (`silence_logs`).
+    # warnings and errors are not shown (a worker "still alive after 4.0 seconds, killing",
+    # or one whose heartbeat found the scheduler already closed, at shutdown): the level of
+    # the 'distributed' loggers, here and in the workers (`silence_logs`); a task's own
+    # failure still comes back to the command (`run_tasks`).
     with dask.config.set({"distributed.worker.profile.enabled": False}), interrupts_here():
         cluster = LocalCluster(
             n_workers=workers or os.cpu_count() or 1,
@@ -52,7 +54,7 @@ def _client(workers: int | None, scheduler: str | None):
             # the scheduler's HTTP server starts even without a dashboard; on a free port,
             # so a second cluster on the machine (another study, a notebook) is no clash
             dashboard_address=":0",
-            silence_logs=logging.ERROR if verbosity() == 0 else logging.WARNING,
+            silence_logs=logging.CRITICAL if verbosity() == 0 else logging.WARNING,
         )
     return Client(cluster), cluster
 
