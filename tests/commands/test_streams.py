@@ -139,7 +139,7 @@ def test_quiet_starts_the_local_cluster_with_its_logs_silenced(monkeypatch):
     monkeypatch.setattr(distributed, "LocalCluster", lambda **kw: given.update(kw))
     monkeypatch.setattr(distributed, "Client", lambda cluster: None)
     try:
-        for level, expected in ((0, "ERROR"), (1, "WARNING")):
+        for level, expected in ((0, "CRITICAL"), (1, "WARNING")):
             set_verbosity(level)
             parallel._client(2, None)
             assert given["silence_logs"] == getattr(logging, expected)
