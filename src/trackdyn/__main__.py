@@ -3,7 +3,8 @@
 Interrupts are handled before anything heavy is imported, and the process ends without
 the interpreter's slow shutdown (where Python gives SIGINT back its default action), so
 Ctrl-C ends the command with exit code 130 and no partial output at any moment
-(`trackdyn.commands.staging`).
+(`trackdyn.commands.staging`). The garbage collector runs less often than Python's default
+(`trackdyn.commands.staging.collect_rarely`): a command's process lives seconds.
 """
 
 import os
@@ -19,9 +20,10 @@ def main():
     """Run the command-line interface."""
     for sig in (signal.SIGINT, signal.SIGTERM):  # first thing, before any heavy import
         signal.signal(sig, _exit_interrupted)
-    from trackdyn.commands.staging import handle_interrupts
+    from trackdyn.commands.staging import collect_rarely, handle_interrupts
 
     handle_interrupts()
+    collect_rarely()
     from trackdyn.cli import app
 
     try:

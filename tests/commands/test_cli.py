@@ -265,3 +265,21 @@ def test_the_cli_starts_without_numpy_or_rich():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+@pytest.mark.slow
+def test_the_command_collects_garbage_rarely():
+    """The ``trackdyn`` process sets the collector's thresholds before the command runs
+    (`trackdyn.commands.staging.collect_rarely`); a program calling the CLI keeps its own."""
+    import gc
+    import subprocess
+    import sys
+
+    from trackdyn.commands.staging import COLLECTIONS
+
+    code = (
+        "import gc, trackdyn.cli, trackdyn.__main__ as entry; "
+        "trackdyn.cli.app = lambda **_: print(gc.get_threshold()); entry.main()"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == str(COLLECTIONS) != str(gc.get_threshold())

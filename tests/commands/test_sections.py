@@ -1,5 +1,6 @@
 """Sections lists and their runs through Dask: same results with 1 and 2 workers."""
 
+import gc
 import os
 
 import numpy as np
@@ -11,6 +12,7 @@ from trackdyn.commands.deteriorate.outputs import write_outputs
 from trackdyn.commands.deteriorate.scenario import load_deterioration
 from trackdyn.commands.deteriorate.sections import read_sections, section_tasks
 from trackdyn.commands.drawing import HELPED_FIGURES, helper
+from trackdyn.commands.staging import COLLECTIONS
 from trackdyn.deterioration.runs import run_sections
 from trackdyn.errors import TrackdynInputError
 from trackdyn.io import write_geometry, write_supports
@@ -84,6 +86,8 @@ def test_one_and_two_workers_give_identical_results(folder, tmp_path):
         with helper(len(figures)) as pool:
             # no helper on one core: this process draws them all, to the same bytes
             assert (pool is None) == (len(os.sched_getaffinity(0)) < 2)
+            if pool is not None:  # it collects garbage as rarely as the command
+                assert pool.submit(gc.get_threshold).result() == COLLECTIONS != gc.get_threshold()
             if kill and pool is not None:
                 for child in psutil.Process().children():
                     if "spawn_main" in " ".join(child.cmdline()):

@@ -26,6 +26,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from trackdyn.commands.staging import collect_rarely
 from trackdyn.parallel import interrupts_here
 
 HELPED_FIGURES = 8
@@ -56,7 +57,9 @@ def _save(drawing: Drawing, path: Path) -> None:
 
 
 def _ready() -> None:
-    """The helper's start: the figures' modules imported before the first figure comes."""
+    """The helper's start: the figures' modules imported before the first figure comes, the
+    garbage collected as rarely as in the command (`trackdyn.commands.staging.collect_rarely`)."""
+    collect_rarely()
     import trackdyn.plots  # noqa: F401 - matplotlib and pyplot, imported once
 
 
