@@ -168,9 +168,10 @@ def test_no_traffic_is_never_tamped(short):
 
 
 def _intervals(damage: float, total: float) -> np.ndarray:
-    """Intervals between the tampings of one 100 m segment of uniform track with a varying
-    ballast (rate field cov 0.3), threshold 1.5 mm [MGT]. The tamping keeps the whole shape
-    (``kept_correlation = 1``: no new random irregularity), so cycles may repeat exactly."""
+    """Intervals between the tampings of the one segment (100 m and the 19 m rest) of
+    uniform track with a varying ballast (rate field cov 0.3), threshold 1.5 mm [MGT]. The
+    tamping keeps the whole shape (``kept_correlation = 1``: no new random irregularity), so
+    cycles may repeat exactly."""
     uniform = synthetic_track(120.0, spectrum=None, stiffness_cov=0.0, gap=0.0, seed=1)
     m = MaintenanceOptions(damage_per_tamping=damage, kept_correlation=1.0)
     o = options(maintenance=m, total_mgt=total, snapshot_every_mgt=total, rate_cov=0.3,
@@ -183,17 +184,23 @@ def _intervals(damage: float, total: float) -> np.ndarray:
 def test_without_ballast_damage_the_cycles_repeat():
     """Each tamping leaves the same state (the recovery relation from the same threshold,
     the law's memory of `consolidated_mgt`): the intervals after the first (which starts
-    from new ballast) are equal within 10 % (measured: 27.9-29.2 MGT over 300 MGT)."""
+    from new ballast) change by at most 4 % from one to the next (measured over 300 MGT:
+    30.4, 30.5, 29.9, ... 27.2 MGT, at most 2.7 %; with ballast damage 0.15 they shorten by
+    about 18 % each, below). The slow drift (1.2 % a cycle) is the long waves of the
+    settlement, which tamping in the D1 band leaves, seen by the band filter at the section's
+    far end: the segment reaches it (a 120 m section is one segment of 100 m with the rest;
+    before the rest was left out of every segment: 27.9-29.2 MGT)."""
     later = _intervals(0.0, 300.0)[1:]
     assert later.size >= 5
-    assert later.max() <= 1.1 * later.min()
+    assert np.all(np.abs(np.diff(later)) <= 0.04 * later[:-1])
+    assert later.max() <= 1.15 * later.min()
 
 
 def test_ballast_damage_shortens_each_interval_until_renewal():
     """Each tamping raises the settlement rate of the ballast (Abadi et al. 2016): each
     interval after the first is shorter than the one before, up to the renewal after
-    `max_tampings` (6), which undoes the damage (measured: 22.3, 18.1, 14.8, 12.1, 10.0,
-    8.3 MGT, then 29.0 MGT after the renewal)."""
+    `max_tampings` (6), which undoes the damage (measured: 24.1, 19.3, 15.3, 12.2, 9.8,
+    8.0 MGT, then 27.8 MGT after the renewal)."""
     intervals = _intervals(0.15, 150.0)
     worn = intervals[1:7]  # tampings 2-7: the 7th is the renewal
     assert np.all(np.diff(worn) < 0)
@@ -266,3 +273,21 @@ def test_a_d1_assessment_set_up_once_equals_one_set_up_for_each_geometry(track):
     assert not np.array_equal(assess(g)[0], assess(settled)[0])  # not a stale answer
     assert assess(coarse)[0].shape == assess(g)[0].shape
     assert not np.array_equal(assess(coarse)[0], assess(g)[0])
+
+
+def test_every_metre_of_a_section_is_in_a_segment():
+    """A 500 m section in 200 m segments: the remainder (under half a segment) belongs to
+    the last one, so a fault there is assessed and tamped (it was once left out)."""
+    trk = synthetic_track(500.0, spectrum="fra5", seed=7)
+    sd, starts, ends = d1_sd(trk.geometry, trk.extent, 200.0)
+    # from the first to the last point of the geometry's 0.25 m grid inside the extent
+    assert starts[0] == pytest.approx(trk.extent[0], abs=0.25)
+    assert ends[-1] == pytest.approx(trk.extent[1], abs=0.25)
+    np.testing.assert_array_equal(starts[1:], ends[:-1])  # no gap between segments
+    assert sd.shape == (2, 2) and 298.0 < ends[-1] - starts[-1] < 300.0  # 200 m + the rest
+    m = Maintenance(MaintenanceOptions(run_out_m=0.0), trk.supports.position, starts, ends, 1.6)
+    _, held = m.tamp(10.0, np.array([1]), trk.geometry, trk.extent, 200.0)
+    pos = trk.supports.position
+    np.testing.assert_array_equal(held[0], (pos >= starts[1]) & (pos <= ends[1]))
+    # the 98.75 m from 400.5 m to the last grid point, 499.25 m: 164 sleepers at 0.6 m
+    assert held[0, pos > 400.5].sum() == 164

@@ -115,11 +115,14 @@ def test_segment_sd_of_filtered_sine():
 
 
 def test_segment_sd_partial_segment_rule():
-    x = np.arange(50.0, 1149.9, DX)  # 1099.75 m: remainder 99.75 m <= 100 m, dropped
+    x = np.arange(50.0, 1149.9, DX)  # 1099.75 m: remainder 99.75 m <= 100 m, in the last
     df = segment_sd(x, sine(x, 10.0))
     assert len(df) == 5
     assert df["segment_start_m"].iloc[0] == 50.0
-    assert df["segment_end_m"].iloc[-1] == 1050.0
+    assert df["segment_start_m"].iloc[-1] == 850.0
+    assert df["segment_end_m"].iloc[-1] == x[-1]  # 299.75 m: every position assessed
+    tail = x >= 850.0
+    assert df["sd_mm"].iloc[-1] == np.std(sine(x[tail], 10.0)) * 1e3  # its samples, all
     x = np.arange(50.0, 1200.1, DX)  # 1150 m: remainder 150 m > 100 m, kept
     df = segment_sd(x, sine(x, 10.0))
     assert len(df) == 6

@@ -143,8 +143,10 @@ def segment_sd(distance, level, segment_length: float = 200.0) -> pd.DataFrame:
     """Standard deviation of the longitudinal level over fixed-length segments.
 
     Segments start at ``distance[0]`` and are half-open, ``[start, start + L)``, except that
-    the last one also holds its end point. A trailing partial segment is reported (ending at
-    ``distance[-1]``) only if it is longer than ``L / 2``; otherwise it is dropped. The SD
+    the last one also holds its end point. A remainder longer than ``L / 2`` is a segment of
+    its own (ending at ``distance[-1]``); a shorter one belongs to the last whole segment
+    (which then ends at ``distance[-1]``, up to ``1.5 L`` long), so every position is in a
+    segment, unless the series is ``L / 2`` long or shorter (no segment). The SD
     is over the samples in the segment (``ddof=0``, not distance-weighted); a segment with
     fewer than 2 samples gets NaN.
 
@@ -205,6 +207,8 @@ class Segments:
         if span - n_full * seg > seg / 2.0:
             starts = np.append(starts, x[0] + n_full * seg)
             ends = np.append(ends, x[-1])
+        elif n_full > 0:  # a remainder of at most half a segment: part of the last one
+            ends[-1] = x[-1]
         self.starts, self.ends, self._rows = starts, ends, []
         for k, (start, end) in enumerate(zip(starts, ends, strict=True)):
             lo = np.searchsorted(x, start - tol, side="left")
