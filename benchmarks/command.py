@@ -4,7 +4,8 @@ Run with ``python benchmarks/command.py`` (``--smoke``: 2 sections of 300 m thro
 a short check for CI). Writes a line of 4 synthetic sections of 500 m (FRA class 5
 geometry, different seeds, the example's stiffness field), a sections CSV and a scenario
 TOML (the built-in example's traffic, law, loop and 11-DOF model, tamped start, 50 MGT,
-no maintenance) into a temporary folder, then:
+no maintenance) into a temporary folder (``--sections N``: N sections; the cost of one more
+section is the difference of 4 and 16), then:
 
 1. times one 11-DOF `simulate` of the loaded wagon over the first 500 m section in this
    process (10 times, the compiled loop loaded beforehand; best and median: on a shared
@@ -147,8 +148,9 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=None, help="the command's --workers")
     parser.add_argument("--tries", type=int, default=3, help="runs of the command")
     parser.add_argument("--profile", action="store_true", help="the command's phases")
+    parser.add_argument("--sections", type=int, default=4, help="sections of 500 m in the line")
     opts = parser.parse_args()
-    n, length, mgt, repeat = (2, 300.0, 1.0, 1) if opts.smoke else (4, 500.0, 50.0, 10)
+    n, length, mgt, repeat = (2, 300.0, 1.0, 1) if opts.smoke else (opts.sections, 500.0, 50.0, 10)
     tries = 1 if opts.smoke else opts.tries
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
