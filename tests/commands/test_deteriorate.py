@@ -86,6 +86,14 @@ def test_deteriorate_writes_dataset_tables_and_figures(folder, tmp_path):
     assert np.isinf(table["trigger_mgt"].iloc[1])
     steps = pd.read_csv(out / "steps.csv")
     assert len(steps) == ds.attrs["steps"]
+    # the straight-line diagram spans the section: no margin before its start (there was)
+    import matplotlib.pyplot as plt
+
+    from trackdyn.plots.deteriorate import plot_straight_line
+
+    fig = plot_straight_line(ds)
+    assert fig.axes[1].get_xlim() == (float(ds.distance[0]), float(ds.distance[-1]))
+    plt.close(fig)
 
 
 BAD = {

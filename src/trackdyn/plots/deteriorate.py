@@ -232,6 +232,7 @@ def plot_straight_line(ds, ax=None, *, title: str = "") -> Figure:
     top.plot(x[hanging], np.full(hanging.sum(), 0.5), "v", color="k", ms=4,
              label=f"hanging > {VOID_SHOWN * 1e3:g} mm at the end")  # fmt: skip
     top.set_ylim(0, 1)
+    top.set_xlim(float(ds.distance[0]), float(ds.distance[-1]))  # the section, no margin
     top.set_yticks([])
     top.set_ylabel("zones", rotation=0, ha="right", va="center")
     top.legend(loc="lower left", bbox_to_anchor=(0.0, 1.02), ncol=len(names) + 1, fontsize=8)
