@@ -235,6 +235,15 @@ def deteriorate(
     scheduler: Annotated[
         str | None, typer.Option(help="Address of a running Dask scheduler, tcp://HOST:PORT.")
     ] = None,
+    section_figures: Annotated[
+        int | None,
+        typer.Option(
+            min=0,
+            help="Sections whose own figures are drawn (default 12): all of a line of up to "
+            "that many, else that many, those that reach the maintenance threshold first; "
+            "the tables hold every section.",
+        ),
+    ] = None,
 ):
     """Predict track deterioration over accumulated traffic (settlement, geometry, D1 SD).
 
@@ -243,7 +252,7 @@ def deteriorate(
     """
     from trackdyn.commands.deteriorate import deteriorate as job
 
-    job(scenario, out, overwrite, workers, scheduler, console)
+    job(scenario, out, overwrite, workers, scheduler, console, section_figures)
 
 
 @app.command(cls=_Listed)

@@ -90,6 +90,13 @@ def test_forecast_writes_its_tables_and_keeps_the_deterministic_run(folder, tmp_
     assert len(headline["forecast_first_tamping_mgt"]) == 2
     for name in ("geometry_forecast_fan.png", "forecast_probability.png"):
         assert (ens / name).stat().st_size > 10_000
+    # without the section's figures: the same tables, no figure but the line's (none here)
+    bare = tmp_path / "bare"
+    result = runner.invoke(app, ["deteriorate", str(folder / "forecast.toml"), "--workers", "1",
+                                 "--out", str(bare), "--section-figures", "0"])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    assert not list(bare.glob("*.png"))
+    pd.testing.assert_frame_equal(pd.read_csv(bare / "forecast.csv"), table)
 
 
 @pytest.mark.parametrize(

@@ -4,11 +4,17 @@ import gc
 import os
 
 import numpy as np
+import pandas as pd
 import psutil
 import pytest
 import xarray as xr
 
-from trackdyn.commands.deteriorate.outputs import write_outputs
+from trackdyn.commands.deteriorate.outputs import (
+    FIGURED_SECTIONS,
+    SECTION_FIGURES,
+    figured,
+    write_outputs,
+)
 from trackdyn.commands.deteriorate.scenario import load_deterioration
 from trackdyn.commands.deteriorate.sections import read_sections, section_tasks
 from trackdyn.commands.drawing import HELPED_FIGURES, helper
@@ -118,3 +124,47 @@ def test_bad_sections_lists(folder, text, message):
     path.write_text(text)
     with pytest.raises(TrackdynInputError, match=message):
         read_sections(path)
+
+
+def test_a_long_line_draws_the_figures_of_its_most_urgent_sections(folder, tmp_path):
+    """Of a line of more sections than the limit only the most urgent get their own
+    figures: those that reach the threshold first, then the worst D1 SD at the end; the
+    tables and netCDF files hold every section."""
+    a = run_sections(section_tasks(*load_deterioration(folder / "scenario.toml")), workers=1)[0]
+    line = []  # five sections of one run, their first triggers and final D1 SD set here
+    for i, (trigger, worse) in enumerate(zip([np.inf, 3.0, np.inf, 1.0, np.inf],
+                                             [1.0, 1.0, 2.0, 1.0, 1.5], strict=True)):  # fmt: skip
+        ds = a.copy(deep=True)
+        ds.attrs["section"] = f"s{i}"
+        ds["trigger_mgt_any_rail"][:] = trigger
+        ds["d1_sd"] = ds.d1_sd * worse
+        line.append(ds)
+    assert figured(line, 5) == ["s0", "s1", "s2", "s3", "s4"]  # no more than the limit
+    assert figured(line, 3) == ["s1", "s2", "s3"]  # at 3 and 1 MGT, then the worst D1 SD
+    assert figured(line, 1) == ["s3"] and figured(line, 0) == []
+    names = write_outputs(line, tmp_path, figures_of=figured(line, 3))
+    pngs = {f"s{i}_{kind}.png" for i in (1, 2, 3) for kind in SECTION_FIGURES}
+    assert {n for n in names if n.endswith(".png")} == pngs | {"line.png"}
+    assert {p.name for p in tmp_path.glob("*.png")} == pngs | {"line.png"}
+    assert all(f"deterioration_s{i}.nc" in names for i in range(5))
+    every = [f"s{i}" for i in range(5)]
+    assert list(dict.fromkeys(pd.read_csv(tmp_path / "quality.csv").section)) == every
+
+
+def test_the_command_names_the_sections_it_draws(folder, tmp_path):
+    from typer.testing import CliRunner
+
+    from trackdyn.cli import app
+
+    out = tmp_path / "out"
+    args = ["deteriorate", str(folder / "scenario.toml"), "--out", str(out), "--workers", "1"]
+    result = CliRunner().invoke(app, [*args, "--section-figures", "1"])
+    assert result.exit_code == 0, result.output
+    drawn = {p.name.split("_")[0] for p in out.glob("*.png")} - {"line.png"}
+    assert len(drawn) == 1 and "figures of 1 of the 2 sections: those that reach" in result.output
+    assert (out / "deterioration_a.nc").exists() and (out / "deterioration_b.nc").exists()
+    help_text = CliRunner().invoke(app, ["deteriorate", "--help"]).output
+    assert f"(default {FIGURED_SECTIONS})" in " ".join(help_text.split())  # as the code's
+    result = CliRunner().invoke(app, [*args, "--overwrite", "--section-figures", "-1"])
+    assert result.exit_code == 2
+    assert "'--section-figures': Input should be greater than or equal to 0" in result.output

@@ -21,7 +21,9 @@ from trackdyn.provenance import recorded
 
 
 @recorded
-def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> None:
+def deteriorate(
+    scenario, out, overwrite: bool, workers, scheduler, console, section_figures=None
+) -> None:
     """Predict the deterioration of every section; write its Datasets, tables and figures.
 
     Parameters
@@ -39,14 +41,25 @@ def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> 
         Address of a running Dask scheduler.
     console : rich.console.Console
         Where the summary table is shown.
+    section_figures : int, optional
+        Sections whose own figures are drawn: all of a line of at most this many, else
+        this many, the most urgent (`trackdyn.commands.deteriorate.outputs.figured`);
+        default `trackdyn.commands.deteriorate.outputs.FIGURED_SECTIONS`.
     """
-    from trackdyn.commands.deteriorate.outputs import SECTION_FIGURES, summary, write_outputs
+    from trackdyn.commands.deteriorate.outputs import (
+        FIGURED_SECTIONS,
+        SECTION_FIGURES,
+        figured,
+        summary,
+        write_outputs,
+    )
     from trackdyn.commands.deteriorate.scenario import load_deterioration
     from trackdyn.commands.deteriorate.sections import section_tasks
     from trackdyn.deterioration.runs import in_process, run_sections
 
     spec, base = load_deterioration(scenario)
     require_workers(workers)
+    limit = FIGURED_SECTIONS if section_figures is None else section_figures
     tasks = section_tasks(spec, base)
     serial = in_process(tasks, workers, scheduler)
     if serial:
@@ -58,7 +71,7 @@ def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> 
         from trackdyn.commands.deteriorate.forecast import plan_forecast
 
         plan = plan_forecast(spec, base, tasks)
-    figures = len(SECTION_FIGURES) * len(tasks)
+    figures = len(SECTION_FIGURES) * min(len(tasks), limit)
     with output_folder(out, "deteriorate", overwrite, record) as stage, helper(figures) as pool:
         say_if_compiling("deteriorate", scheduler)
         datasets = run_sections(tasks, workers=workers, scheduler=scheduler, progress=not serial)
@@ -67,11 +80,16 @@ def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> 
             told = ((k.removeprefix(PREFIX), v) for k, v in attrs if k.startswith(PREFIX))
             geometry_notes(told, f"section {ds.attrs['section']}")
         record.headline = {"sections": summary(datasets).to_dict(orient="records")}
-        files = write_outputs(datasets, stage, pool)
+        shown = figured(datasets, limit)
+        if len(shown) < len(datasets):
+            which = f"those that reach the threshold first ({_listed(shown)})" if shown else "none"
+            note(f"figures of {len(shown)} of the {len(datasets)} sections: {which}; "
+                 f"--section-figures {len(datasets)} draws them all")  # fmt: skip
+        files = write_outputs(datasets, stage, pool, shown)
         forecast = table = None
         if plan is not None:
             forecast, table = _forecast(plan, tasks, workers, scheduler, stage, pool, files,
-                                        record)  # fmt: skip
+                                        record, shown)  # fmt: skip
         deferred = None
         if spec.plan is not None:
             deferred = _plan(spec, tasks, datasets, forecast, workers, scheduler, stage, files,
@@ -86,14 +104,21 @@ def deteriorate(scenario, out, overwrite: bool, workers, scheduler, console) -> 
     note("\n".join(record.lines()), 2)
 
 
-def _forecast(plan, tasks, workers, scheduler, stage, pool, files, record):
-    """Run the planned ensemble, write its files into ``stage`` (their figures drawn by
-    ``pool``'s helper; their names added to ``files``) and its headline into ``record``;
-    return ``forecast.csv``'s table."""
+def _listed(names, shown: int = 6) -> str:
+    """``names`` joined, the first ``shown`` of a longer list and how many more."""
+    more = f", and {len(names) - shown} more" if len(names) > shown else ""
+    return ", ".join(names[:shown]) + more
+
+
+def _forecast(plan, tasks, workers, scheduler, stage, pool, files, record, shown):
+    """Run the planned ensemble, write its files into ``stage`` (the figures of the
+    sections ``shown`` names, drawn by ``pool``'s helper; their names added to ``files``)
+    and its headline into ``record``; return ``forecast.csv``'s table."""
     from trackdyn.commands.deteriorate.forecast import headline, run_forecast, write_forecast
 
     forecast = run_forecast(plan, tasks, workers=workers, scheduler=scheduler, progress=True)
-    written, table = write_forecast(forecast, [t.section.name for t in tasks], stage, pool)
+    names = [t.section.name for t in tasks]
+    written, table = write_forecast(forecast, names, stage, pool, shown)
     files += written
     record.headline["forecast_first_tamping_mgt"] = headline(table)
     return forecast, table

@@ -166,15 +166,20 @@ def headline(table: pd.DataFrame) -> list[dict]:
     return first[keep].to_dict(orient="records")
 
 
-def write_forecast(forecast: Forecast, names, folder, pool=None) -> tuple[list[str], pd.DataFrame]:
+def write_forecast(
+    forecast: Forecast, names, folder, pool=None, figures_of=None
+) -> tuple[list[str], pd.DataFrame]:
     """Write the forecast's tables and figures into ``folder``, the figures drawn by the
-    ``pool``'s helper process meanwhile if given (`trackdyn.commands.drawing`).
+    ``pool``'s helper process meanwhile if given (`trackdyn.commands.drawing`); the
+    figures of the sections ``figures_of`` names (default: all;
+    `trackdyn.commands.deteriorate.outputs.figured`), the tables of all.
 
     Returns
     -------
     files : list of str
         The names written: ``forecast.csv``, ``forecast_probability.csv``,
-        ``<section>_forecast_fan.png`` per section and ``forecast_probability.png``.
+        ``<section>_forecast_fan.png`` per section drawn and ``forecast_probability.png``
+        (a panel per section drawn; none without).
     table : pandas.DataFrame
         ``forecast.csv``'s table.
     """
@@ -182,12 +187,15 @@ def write_forecast(forecast: Forecast, names, folder, pool=None) -> tuple[list[s
     from trackdyn.plots.deteriorate import plot_fan, plot_reach_probability
 
     table, probability = tables(forecast, names)
+    chosen = set(names if figures_of is None else figures_of)
     figures = {
         f"{name}_forecast_fan.png": Drawing(plot_fan, (members,), {"title": f"{name}: "
                                                                    f"{len(members)} members"})
-        for name, members in zip(names, forecast.ensembles, strict=True)
+        for name, members in zip(names, forecast.ensembles, strict=True) if name in chosen
     }  # fmt: skip
-    figures["forecast_probability.png"] = Drawing(plot_reach_probability, (probability,))
+    if chosen:
+        shown = probability[probability.section.isin(chosen)]
+        figures["forecast_probability.png"] = Drawing(plot_reach_probability, (shown,))
     with drawn(figures, folder, pool):
         table.to_csv(folder / "forecast.csv", index=False, float_format="%.6g")
         probability.to_csv(folder / "forecast_probability.csv", index=False, float_format="%.6g")

@@ -216,6 +216,30 @@ SECTION_FIGURES = {
 """Each section's figures: ``<name>_<kind>.png`` by its kind."""
 
 
+FIGURED_SECTIONS = 12
+"""Sections whose own figures are drawn by default (`figured`): every section of a line of
+at most this many; of a longer line this many, the most urgent. The tables and netCDF files
+hold every section, ``line.png`` the whole line."""
+
+
+def figured(datasets, limit: int = FIGURED_SECTIONS) -> list[str]:
+    """Names of the sections whose own figures are drawn, in the line's order: all of them
+    for at most ``limit`` sections; else the ``limit`` that reach the maintenance threshold
+    first (`summary`'s ``first_trigger_mgt``), those never reaching it by the worst D1 SD
+    at the end.
+
+    On a network the figures would be most of the command's time (0.9 core-s a section,
+    where its runs take about 0.3 s) and of the report, which embeds each of them.
+    """
+    table = summary(datasets)
+    if len(table) <= limit:
+        return list(table.section)
+    urgent = table.sort_values(["first_trigger_mgt", "d1_sd_max_final_mm"],
+                               ascending=[True, False], kind="stable").head(limit)  # fmt: skip
+    chosen = set(urgent.section)
+    return [name for name in table.section if name in chosen]
+
+
 def section_figures(ds) -> dict[str, Drawing]:
     """A section's figures by file name: ``<name>_geometry.png``, ``<name>_quality.png``,
     ``<name>_settlement_map.png``, ``<name>_straight_line.png`` (`trackdyn.plots.deteriorate`),
@@ -240,13 +264,14 @@ def line_figure(datasets) -> dict[str, Drawing]:
     return {"line.png": Drawing(plot_line, (list(datasets),), {"title": _line_title(datasets)})}
 
 
-def write_outputs(datasets, folder, pool=None) -> list[str]:
+def write_outputs(datasets, folder, pool=None, figures_of=None) -> list[str]:
     """Write every file of a prediction into ``folder``; return the file names.
 
-    Per section ``<name>``: ``deterioration_<name>.nc``, ``settlement_<name>.csv`` and the
-    figures ``<name>_geometry.png``, ``<name>_quality.png`` (the life cycle: D1 SD per
-    segment with the tampings), ``<name>_settlement_map.png``, ``<name>_straight_line.png``
-    (segments along the chainage against tonnage); for all sections: ``summary.csv``,
+    Per section ``<name>``: ``deterioration_<name>.nc``, ``settlement_<name>.csv`` and, for
+    the sections ``figures_of`` names, the figures ``<name>_geometry.png``,
+    ``<name>_quality.png`` (the life cycle: D1 SD per segment with the tampings),
+    ``<name>_settlement_map.png``, ``<name>_straight_line.png`` (segments along the
+    chainage against tonnage); for all sections: ``summary.csv``,
     ``quality.csv``, ``maintenance.csv`` (first triggers), ``steps.csv``, ``line.png``
     (for two or more sections: the straight-line diagram of the whole line),
     ``vehicle_shares.csv`` and, with maintenance, ``interventions.csv`` and
@@ -260,6 +285,8 @@ def write_outputs(datasets, folder, pool=None) -> list[str]:
         Output folder.
     pool : concurrent.futures.ProcessPoolExecutor, optional
         Its helper process draws the figures meanwhile (`trackdyn.commands.drawing.helper`).
+    figures_of : collection of str, optional
+        Sections whose own figures are drawn (`figured`); default: all.
     """
     names = []
 
@@ -267,7 +294,9 @@ def write_outputs(datasets, folder, pool=None) -> list[str]:
         frame.to_csv(folder / name, index=False, float_format="%.6g")
         names.append(name)
 
-    figures = [section_figures(ds) for ds in datasets]
+    chosen = {ds.attrs["section"] for ds in datasets} if figures_of is None else figures_of
+    figures = [section_figures(ds) if ds.attrs["section"] in chosen else {}
+               for ds in datasets]  # fmt: skip
     line = line_figure(datasets)
     tables = [
         ("quality.csv", quality_table),
