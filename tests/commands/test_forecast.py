@@ -121,3 +121,33 @@ def test_a_wrong_forecast_table_is_refused_in_one_line(folder, tmp_path, table, 
     assert result.exit_code == 2, result.output
     assert message in result.output and "Traceback" not in result.output
     assert not (tmp_path / "o").exists()
+
+
+def test_the_probability_figure_has_at_most_its_panels(folder, tmp_path):
+    """A line of many sections drawn: a fan each, but at most `PROBABILITY_PANELS` panels of
+    2.2 in in the probability figure (250 would pass matplotlib's 65 536 pixels)."""
+    from trackdyn.commands.deteriorate.forecast import (
+        PROBABILITY_PANELS,
+        Forecast,
+        forecast_figures,
+        tables,
+    )
+
+    run(folder, "plain.toml", tmp_path / "plain")
+    ds = xr.load_dataset(tmp_path / "plain" / "deterioration_geometry.nc")
+    names = [f"s{i}" for i in range(PROBABILITY_PANELS + 3)]
+    forecast = Forecast(None, [[ds, ds]] * len(names), None, None)  # two members a section
+    _, probability = tables(forecast, names)
+    figures = forecast_figures(forecast, names, probability, names[1:])  # all but s0
+    assert len(figures) == len(names)  # the fans of all but s0, and the probability
+    shown = figures["forecast_probability.png"].args[0]
+    assert list(dict.fromkeys(shown.section)) == names[1 : PROBABILITY_PANELS + 1]
+    assert (
+        f"the first {PROBABILITY_PANELS} of the {len(names) - 1}"
+        in (figures["forecast_probability.png"].kwargs["title"])
+    )
+    few = forecast_figures(forecast, names, probability, names[:2])
+    assert (
+        few["forecast_probability.png"].kwargs["title"] == "Probability of reaching the threshold"
+    )
+    assert not forecast_figures(forecast, names, probability, [])

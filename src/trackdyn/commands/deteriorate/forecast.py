@@ -166,36 +166,67 @@ def headline(table: pd.DataFrame) -> list[dict]:
     return first[keep].to_dict(orient="records")
 
 
-def write_forecast(
-    forecast: Forecast, names, folder, pool=None, figures_of=None
-) -> tuple[list[str], pd.DataFrame]:
-    """Write the forecast's tables and figures into ``folder``, the figures drawn by the
-    ``pool``'s helper process meanwhile if given (`trackdyn.commands.drawing`); the
-    figures of the sections ``figures_of`` names (default: all;
-    `trackdyn.commands.deteriorate.outputs.figured`), the tables of all.
+PROBABILITY_PANELS = 24
+"""Most sections in ``forecast_probability.png``, a panel each (2.2 in high: a figure of 250
+panels would pass matplotlib's limit of 65 536 pixels at 120 dpi); its table holds all."""
 
-    Returns
-    -------
-    files : list of str
-        The names written: ``forecast.csv``, ``forecast_probability.csv``,
-        ``<section>_forecast_fan.png`` per section drawn and ``forecast_probability.png``
-        (a panel per section drawn; none without).
-    table : pandas.DataFrame
-        ``forecast.csv``'s table.
+
+def forecast_figures(forecast: Forecast, names, probability, figures_of=None) -> dict:
+    """The forecast's figures by file name, to be drawn (`trackdyn.commands.drawing.Drawing`):
+    ``<section>_forecast_fan.png`` of each section ``figures_of`` names (default: all;
+    `trackdyn.commands.deteriorate.outputs.figured`) and ``forecast_probability.png``, a
+    panel for each of them, at most `PROBABILITY_PANELS` (none without a section).
+
+    Parameters
+    ----------
+    forecast : Forecast
+        The ensemble's results.
+    names : list of str
+        The sections' names, in the order of ``forecast.ensembles``.
+    probability : pandas.DataFrame
+        ``forecast_probability.csv``'s table (`tables`).
+    figures_of : collection of str, optional
+        The sections drawn.
     """
-    from trackdyn.commands.drawing import Drawing, drawn
+    from trackdyn.commands.drawing import Drawing
     from trackdyn.plots.deteriorate import plot_fan, plot_reach_probability
 
-    table, probability = tables(forecast, names)
     chosen = set(names if figures_of is None else figures_of)
     figures = {
         f"{name}_forecast_fan.png": Drawing(plot_fan, (members,), {"title": f"{name}: "
                                                                    f"{len(members)} members"})
         for name, members in zip(names, forecast.ensembles, strict=True) if name in chosen
     }  # fmt: skip
-    if chosen:
-        shown = probability[probability.section.isin(chosen)]
-        figures["forecast_probability.png"] = Drawing(plot_reach_probability, (shown,))
+    panels = [name for name in names if name in chosen][:PROBABILITY_PANELS]
+    if panels:
+        title = ("Probability of reaching the threshold" if len(panels) == len(chosen) else
+                 f"Probability of reaching the threshold: the first {len(panels)} of the "
+                 f"{len(chosen)} sections drawn")  # fmt: skip
+        shown = probability[probability.section.isin(panels)]
+        figures["forecast_probability.png"] = Drawing(plot_reach_probability, (shown,),
+                                                      {"title": title})  # fmt: skip
+    return figures
+
+
+def write_forecast(
+    forecast: Forecast, names, folder, pool=None, figures_of=None
+) -> tuple[list[str], pd.DataFrame]:
+    """Write the forecast's tables and figures into ``folder``, the figures drawn by the
+    ``pool``'s helper process meanwhile if given (`trackdyn.commands.drawing`); the
+    tables of all sections, the figures of those ``figures_of`` names (`forecast_figures`).
+
+    Returns
+    -------
+    files : list of str
+        The names written: ``forecast.csv``, ``forecast_probability.csv`` and the figures
+        (`forecast_figures`).
+    table : pandas.DataFrame
+        ``forecast.csv``'s table.
+    """
+    from trackdyn.commands.drawing import drawn
+
+    table, probability = tables(forecast, names)
+    figures = forecast_figures(forecast, names, probability, figures_of)
     with drawn(figures, folder, pool):
         table.to_csv(folder / "forecast.csv", index=False, float_format="%.6g")
         probability.to_csv(folder / "forecast_probability.csv", index=False, float_format="%.6g")
