@@ -13,6 +13,7 @@ from trackdyn.commands.deteriorate.outputs import (
     FIGURED_SECTIONS,
     SECTION_FIGURES,
     figured,
+    summary,
     write_outputs,
 )
 from trackdyn.commands.deteriorate.scenario import load_deterioration
@@ -139,10 +140,11 @@ def test_a_long_line_draws_the_figures_of_its_most_urgent_sections(folder, tmp_p
         ds["trigger_mgt_any_rail"][:] = trigger
         ds["d1_sd"] = ds.d1_sd * worse
         line.append(ds)
-    assert figured(line, 5) == ["s0", "s1", "s2", "s3", "s4"]  # no more than the limit
-    assert figured(line, 3) == ["s1", "s2", "s3"]  # at 3 and 1 MGT, then the worst D1 SD
-    assert figured(line, 1) == ["s3"] and figured(line, 0) == []
-    names = write_outputs(line, tmp_path, figures_of=figured(line, 3))
+    table = summary(line)
+    assert figured(table, 5) == ["s0", "s1", "s2", "s3", "s4"]  # no more than the limit
+    assert figured(table, 3) == ["s1", "s2", "s3"]  # at 3 and 1 MGT, then the worst D1 SD
+    assert figured(table, 1) == ["s3"] and figured(table, 0) == []
+    names = write_outputs(line, tmp_path, figures_of=figured(table, 3))
     pngs = {f"s{i}_{kind}.png" for i in (1, 2, 3) for kind in SECTION_FIGURES}
     assert {n for n in names if n.endswith(".png")} == pngs | {"line.png"}
     assert {p.name for p in tmp_path.glob("*.png")} == pngs | {"line.png"}

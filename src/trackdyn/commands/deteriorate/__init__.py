@@ -79,8 +79,9 @@ def deteriorate(
             attrs = ds.attrs.items()
             told = ((k.removeprefix(PREFIX), v) for k, v in attrs if k.startswith(PREFIX))
             geometry_notes(told, f"section {ds.attrs['section']}")
-        record.headline = {"sections": summary(datasets).to_dict(orient="records")}
-        shown = figured(datasets, limit)
+        sections = summary(datasets)
+        record.headline = {"sections": sections.to_dict(orient="records")}
+        shown = figured(sections, limit)
         if len(shown) < len(datasets):
             which = f"those that reach the threshold first ({_listed(shown)})" if shown else "none"
             note(f"figures of {len(shown)} of the {len(datasets)} sections: {which}; "
@@ -95,7 +96,7 @@ def deteriorate(
             deferred = _plan(spec, tasks, datasets, forecast, workers, scheduler, stage, files,
                              record)  # fmt: skip
     title = f"Deterioration, {spec.run.model}: {len(datasets)} section(s)"
-    console.print(deterioration_table(summary(datasets), title))
+    console.print(deterioration_table(sections, title))
     if plan is not None:
         console.print(forecast_table(table, f"First tamping, {plan.members.count} members"))
     if deferred is not None and len(deferred):

@@ -179,10 +179,8 @@ def forecast_figures(forecast: Forecast, names, probability, figures_of=None) ->
 
     Parameters
     ----------
-    forecast : Forecast
-        The ensemble's results.
-    names : list of str
-        The sections' names, in the order of ``forecast.ensembles``.
+    forecast, names
+        As `tables`.
     probability : pandas.DataFrame
         ``forecast_probability.csv``'s table (`tables`).
     figures_of : collection of str, optional

@@ -222,16 +222,15 @@ at most this many; of a longer line this many, the most urgent. The tables and n
 hold every section, ``line.png`` the whole line."""
 
 
-def figured(datasets, limit: int = FIGURED_SECTIONS) -> list[str]:
+def figured(table, limit: int = FIGURED_SECTIONS) -> list[str]:
     """Names of the sections whose own figures are drawn, in the line's order: all of them
     for at most ``limit`` sections; else the ``limit`` that reach the maintenance threshold
-    first (`summary`'s ``first_trigger_mgt``), those never reaching it by the worst D1 SD
-    at the end.
+    first (``first_trigger_mgt`` of ``table``, the line's `summary`), those never reaching
+    it by the worst D1 SD at the end.
 
     On a network the figures would be most of the command's time (0.9 core-s a section,
     where its runs take about 0.3 s) and of the report, which embeds each of them.
     """
-    table = summary(datasets)
     if len(table) <= limit:
         return list(table.section)
     urgent = table.sort_values(["first_trigger_mgt", "d1_sd_max_final_mm"],
