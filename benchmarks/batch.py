@@ -14,7 +14,11 @@ the same runs that stores nothing (`run_batch` with no output kept), "in the ker
 process's system time (``getrusage``): mostly the pages of new memory for the stored
 arrays, made and zeroed by the system on their first write (one run's arrays, 9 of at
 most 8 MB over 300 m, are taken again from the memory the previous run freed; the
-batch's, 9 of 8 runs' rows each, are mapped afresh each time).
+batch's, 9 of 8 runs' rows each, are mapped afresh each time). Last, a floor under the
+batch: its runs' loops storing nothing, and the same 9 arrays as the batch's outputs made
+new and written once by numpy (``fill``, best of ``--repeat``), which is what storing every
+output of 8 runs costs at the least on this machine's memory; "ratio" of the floor is its
+time over the one run's.
 """
 
 from __future__ import annotations
@@ -81,6 +85,17 @@ def elapsed(func) -> float:
     return time.perf_counter() - t
 
 
+def fresh_outputs(shapes) -> float:
+    """Wall time [s] of making arrays of ``shapes`` anew and writing each once (numpy's
+    ``fill``), then letting them go, as the batch's outputs are made, written and freed."""
+    t = time.perf_counter()
+    arrays = [np.empty(shape) for shape in shapes]
+    for a in arrays:
+        a.fill(1.0)
+    del arrays
+    return time.perf_counter() - t
+
+
 def split(func) -> dict:
     """Time [s] of each part of ``func()`` (`PARTS`), ``rest`` and ``total``, and the
     system time [s] spent meanwhile, ``kernel`` (apart: it is within the parts)."""
@@ -128,6 +143,10 @@ def main():
     with timers() as spent:
         bare()
     stored = splits["batch"]["loops"] - spent["loops"]
+    (first,) = run_batch(vehicles[:1], track, [options])
+    shapes = [(RUNS * a.shape[0], *a.shape[1:]) for a in first.out.values()]
+    memory = min(fresh_outputs(shapes) for _ in range(repeat))
+    floor = spent["loops"] + memory
     steps = alone[0].time.size
     print(f"11dof, {options.end_m:g} m at 60 km/h, {steps} steps, every one stored, one "
           f"numba thread; best of {repeat}")  # fmt: skip
@@ -141,6 +160,11 @@ def main():
     print(f"of which storing in the batch's loops: {stored * 1e3:.1f} ms; in the kernel: "
           f"one {splits['one']['kernel'] * 1e3:.1f} ms, batch "
           f"{splits['batch']['kernel'] * 1e3:.1f} ms")  # fmt: skip
+    megabytes = sum(np.prod(s) for s in shapes) * 8 / 1e6
+    print(f"floor: the batch's loops storing nothing {spent['loops'] * 1e3:.1f} ms, its "
+          f"outputs ({megabytes:.0f} MB) made new and written once {memory * 1e3:.1f} ms: "
+          f"{floor * 1e3:.1f} ms, ratio {floor / best['one']:.2f}; the batch takes "
+          f"{best['batch'] / floor:.2f} times it")  # fmt: skip
     assert same, "a run of the batch differs from the run alone"
 
 

@@ -13,7 +13,10 @@ section is the difference of 4 and 16), then:
 2. runs ``trackdyn -q deteriorate`` on the line in a new process, as a user would (start-up
    included; ``--workers`` as given, default none: the command's own choice), best of
    ``--tries``, and reports its wall time per section in single runs (goal: at most 10);
-3. with ``--profile``, runs the command once more under ``cProfile`` and prints where
+3. times a new process that only imports the packages the command uses (`PACKAGES`, best
+   of ``--tries``): a floor under the command's start-up that no change to trackdyn can
+   lower, reported in single runs per section too;
+4. with ``--profile``, runs the command once more under ``cProfile`` and prints where
    its time went: imports, the runs (reading the tracks, the loops, the solver, which
    includes loading the compiled loops from numba's cache), netCDF, figures.
 
@@ -61,6 +64,14 @@ start = "tamped"
 GOAL = 10.0
 """Goal: a section's deterioration through 50 MGT, start-up included, in single runs."""
 
+PACKAGES = (
+    "numpy", "scipy.signal", "scipy.interpolate", "pandas", "xarray", "netCDF4", "numba",
+    "matplotlib.pyplot", "distributed", "pint", "pydantic", "typer", "rich",
+)  # fmt: skip
+"""The packages ``trackdyn deteriorate`` imports (found in ``sys.modules`` after a run of the
+command, those it needs for the loop, its files, figures, cluster, units, scenario and
+console), trackdyn itself not among them."""
+
 
 def one_run(csv: Path, repeat: int) -> list[float]:
     """Wall times of `repeat` `simulate` calls over the line's first section, sorted [s]."""
@@ -90,6 +101,13 @@ def command(folder: Path, workers: int | None) -> float:
         args += ["--workers", str(workers)]
     clock = time.perf_counter()
     subprocess.run(args, check=True, stdout=subprocess.DEVNULL)
+    return time.perf_counter() - clock
+
+
+def imports() -> float:
+    """Wall time of a new Python process that imports `PACKAGES` and nothing else [s]."""
+    clock = time.perf_counter()
+    subprocess.run([sys.executable, "-c", "import " + ", ".join(PACKAGES)], check=True)
     return time.perf_counter() - clock
 
 
@@ -160,6 +178,7 @@ def main() -> None:
         single = one_run(csv, repeat)
         load = os.getloadavg()[0]
         walls = [command(folder, opts.workers) for _ in range(tries)]
+        floor = min(imports() for _ in range(tries))
         if opts.profile:
             phases(folder, opts.workers)
     wall = min(walls)
@@ -172,6 +191,8 @@ def main() -> None:
           f"{wall:.2f} s wall (best of {tries}: {each}); load {load:.1f}")  # fmt: skip
     print(f"  a section in single runs, start-up included: {wall / n / median:.1f} of the "
           f"median run, {wall / n / best:.1f} of the best (goal: at most {GOAL:g})")  # fmt: skip
+    print(f"  a new process importing the packages it uses, nothing else: {floor:.2f} s, "
+          f"{floor / n / median:.1f} single runs a section of the median run")  # fmt: skip
 
 
 if __name__ == "__main__":

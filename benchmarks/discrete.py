@@ -4,7 +4,9 @@ Run with ``python benchmarks/discrete.py`` (``--smoke`` for a short check in CI)
 loaded wagon at 60 km/h over the built-in example (its whole 1 km, or 100 m with
 ``--smoke``), end to end through `trackdyn.simulation.run_batch` (best of 3, compiled code
 cached by a first run); and where the time goes: building the discrete track (rest state),
-the static start, the compiled loop, and the rest (geometry sampling, storage). With
+the static start, the compiled loop, and the rest (geometry sampling, storage); then the
+same run on the Winkler track in the same process (best of 3), and the ratio of the two
+(goal: at most 2). With
 ``--deteriorate``, the built-in 50 MGT deterioration example (``--mgt`` to change it, 2 MGT
 with ``--smoke``) on the discrete and on the Winkler track, with ``--voids`` the ballast
 under a void too: steps, wall time and its split as the loop records it.
@@ -73,6 +75,15 @@ def main(smoke: bool) -> None:
     print(f"rest state: {parts['_rest']:.3f} s; static start: {parts['start']:.3f} s; "
           f"the rest (track build, geometry sampling, storage): "
           f"{best - loop - parts['_rest'] - parts['start']:.3f} s")  # fmt: skip
+    winkler = options.model_copy(update={"track": "winkler"})
+    run_batch([vehicle], [track], [winkler])
+    walls = []
+    for _ in range(1 if smoke else 3):
+        t = time.perf_counter()
+        run_batch([vehicle], [track], [winkler])
+        walls.append(time.perf_counter() - t)
+    print(f"the same on the Winkler track: {min(walls):.3f} s end to end; the discrete track "
+          f"takes {best / min(walls):.2f} times as long (goal: at most 2)")  # fmt: skip
 
 
 def deteriorate(smoke: bool, voids: bool, mgt: float | None) -> None:
