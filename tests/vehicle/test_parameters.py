@@ -36,6 +36,23 @@ def test_base_file_is_relative_to_the_file(tmp_path, monkeypatch):
     assert load_vehicle(tmp_path / "child.toml").m1 == load_vehicle("empty").m1
 
 
+def test_a_loop_of_bases_is_refused_in_one_line(tmp_path):
+    # a file its own base, and two files each the other's (a RecursionError's traceback
+    # before the check)
+    (tmp_path / "self.toml").write_text('base = "self.toml"\n')
+    (tmp_path / "a.toml").write_text('base = "b.toml"\n')
+    (tmp_path / "b.toml").write_text('base = "a.toml"\n')
+    for name, loop in (("self", "self.toml -> self.toml"), ("a", "a.toml -> b.toml -> a.toml")):
+        with pytest.raises(TrackdynInputError) as err:
+            load_vehicle(tmp_path / f"{name}.toml")
+        assert str(err.value).endswith(f"makes a loop of bases ({loop})")
+        assert "\n" not in str(err.value)
+    # the same file twice along different branches is no loop
+    (tmp_path / "c.toml").write_text('base = "empty"\n')
+    (tmp_path / "d.toml").write_text('base = "c.toml"\n')
+    assert load_vehicle(tmp_path / "d.toml").m1 == load_vehicle("empty").m1
+
+
 def test_replace_refuses_unknown_name():
     with pytest.raises(TrackdynInputError, match="unknown vehicle parameter 'kappa'"):
         load_vehicle("loaded").replace(kappa=1.0)

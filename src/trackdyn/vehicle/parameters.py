@@ -193,12 +193,24 @@ def load_vehicle(name_or_path, **overrides) -> Vehicle:
     **overrides : float
         Parameter values replacing the file's [SI units].
     """
-    path = vehicle_file(name_or_path)
+    vehicle = _load(vehicle_file(name_or_path), ())
+    return vehicle.replace(**overrides) if overrides else vehicle
+
+
+def _load(path: Path, below: tuple[Path, ...]) -> Vehicle:
+    """The vehicle of file ``path``, on its ``base`` if it names one; ``below``: the files
+    that named it as their base, in turn (a base among them is refused: a loop)."""
     data = read_toml(path)
     values, sources = {}, {}
     if "base" in data:
-        base = load_vehicle(vehicle_source(data.pop("base"), path.parent))
-        values, sources = base.as_dict(), dict(base.sources)
+        named = data.pop("base")
+        base = vehicle_file(vehicle_source(named, path.parent))
+        chain = (*below, path)
+        if base.resolve() in {f.resolve() for f in chain}:
+            loop = " -> ".join(f.name for f in (*chain, base))
+            raise TrackdynInputError(f"{path}: base {named!r} makes a loop of bases ({loop})")
+        vehicle = _load(base, chain)
+        values, sources = vehicle.as_dict(), dict(vehicle.sources)
     name = str(data.pop("name", path.stem))
     for key, entry in data.items():
         _check_name(key, f"{path}: ")
@@ -208,7 +220,6 @@ def load_vehicle(name_or_path, **overrides) -> Vehicle:
     if missing:
         raise TrackdynInputError(f"{path}: missing vehicle parameter {missing[0]}")
     try:
-        vehicle = Vehicle(**values, name=name, sources=sources)
+        return Vehicle(**values, name=name, sources=sources)
     except TrackdynInputError as exc:
         raise TrackdynInputError(f"{path}: {exc}") from None
-    return vehicle.replace(**overrides) if overrides else vehicle
