@@ -224,3 +224,24 @@ def test_a_capped_plan_stays_under_its_cap_and_lists_what_it_defers(planned):
     assert plan.groupby("year").length_m.sum().max() <= cap
     assert len(deferred)  # 60 m a year is less than the section needs
     assert deferred.d1_sd_year_end_mm.notna().all()
+
+
+def test_a_budget_below_every_stretch_plans_nothing_and_defers_everything(tmp_path):
+    # a budget of 650 a year against 700 for the shortest stretch (60 m at 10 a metre and
+    # 100 a possession): no stretch fits, so the plan has no row (its files and figure
+    # still written, the header kept; a KeyError from the empty table's figure before)
+    spot = SoftSpot(centre=30.0, length=6.0, factor=0.45, gap=1.5e-3)
+    trk = synthetic_track(120.0, spectrum=None, stiffness_cov=0.0, seed=1, features=(spot,))
+    write_geometry(trk.geometry, tmp_path / "geometry.csv")
+    write_supports(trk.supports, tmp_path / "supports.csv")
+    scenario = SCENARIO.replace("[track]", "budget_per_year = 650\n[track]")
+    (tmp_path / "scenario.toml").write_text(scenario)
+    out = tmp_path / "out"
+    args = ["deteriorate", str(tmp_path / "scenario.toml"), "--out", str(out), "--workers", "1"]
+    result = runner.invoke(app, args)
+    assert result.exit_code == 0, result.output
+    plan = pd.read_csv(out / "plan.csv")
+    assert plan.empty and "cost_EUR" in plan.columns and "year" in plan.columns
+    deferred = pd.read_csv(out / "plan_deferred.csv")
+    assert len(deferred) and (out / "plan.png").is_file()
+    assert deferred.deferred_to.isna().any()  # what no year of the horizon could take

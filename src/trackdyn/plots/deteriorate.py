@@ -4,6 +4,7 @@ settlement map and the straight-line diagram; for a line of sections its diagram
 from __future__ import annotations
 
 import numpy as np
+from matplotlib.ticker import MaxNLocator
 
 from trackdyn.plots import RAIL_COLOURS, Figure, finished, panels, plt
 
@@ -438,6 +439,7 @@ def plot_plan(table, deferred, bounds, ax=None, *, title: str = "") -> Figure:
     years = [*table["year"], *deferred["year"], 1]
     axis.set_xlim(0.0, offset)
     axis.set_ylim(max(years) + 0.5, 0.5)
+    axis.yaxis.set_major_locator(MaxNLocator(integer=True))  # whole plan years
     axis.set_xlabel("distance along the line, sections end to end [m]")
     axis.set_ylabel("plan year")
     fig.suptitle(title or "Maintenance plan")

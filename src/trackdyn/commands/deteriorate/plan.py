@@ -104,6 +104,7 @@ def plan_tables(plan: Plan, lines, followed, rules: Rules, code: str):
     code : str
         The currency of the costs.
     """
+    cost = money_name("cost", code)
     rows = []
     for s in plan.stretches:
         needs, ds = lines[s.section], followed[s.section]
@@ -117,7 +118,7 @@ def plan_tables(plan: Plan, lines, followed, rules: Rules, code: str):
             "d1_sd_before_mm": float(ds.d1_sd_before.values[mine].max()) if mine.any()
             else np.nan,
             "forecast_reach_year": s.reach_year, "probability": s.probability,
-            money_name("cost", code): rules.cost(end - start),
+            cost: rules.cost(end - start),
         })  # fmt: skip
     deferred = []
     for s, to in plan.deferred:
@@ -129,9 +130,13 @@ def plan_tables(plan: Plan, lines, followed, rules: Rules, code: str):
             "length_m": end - start, "d1_sd_year_end_mm": _worst(sd, s.due),
             "probability": s.probability, "deferred_to": np.nan if to is None else to,
         })  # fmt: skip
+    # the columns named, so that a plan of no stretch (a budget smaller than any) or nothing
+    # deferred is a table of no rows with its header
+    planned = ["year", "section", "start_m", "end_m", "length_m", "action", "segments_due",
+               "d1_sd_before_mm", "forecast_reach_year", "probability", cost]  # fmt: skip
     columns = ["year", "section", "start_m", "end_m", "length_m", "d1_sd_year_end_mm",
                "probability", "deferred_to"]  # fmt: skip
-    return pd.DataFrame(rows), pd.DataFrame(deferred, columns=columns)
+    return pd.DataFrame(rows, columns=planned), pd.DataFrame(deferred, columns=columns)
 
 
 def run_plan(spec, tasks, datasets, forecast, *, workers=None, scheduler=None):
